@@ -1,0 +1,162 @@
+#pragma once
+// A closed-loop scenario as plain structs with defaults: the device (stages), the input SOP
+// and its disturbances, the target, the controller and the simulation settings.
+//
+// The structure and the field names mirror the Protobuf schema common/proto/dpc/scenario.proto
+// one to one, so that ValidateScenario (scenario_validation.h) can name a bad field by the path
+// a user wrote in the text file, e.g. "stages[1].map.table.angle_rad[3]". The core never
+// depends on Protobuf: the scenario_io library converts text format into these structs.
+//
+// The defaults are the paper's scenario (section IV): R1R3R1, θ = π·φ, target [0, 0.6, 0.8],
+// input rotating about S3 at 100 krad/s with random kicks about S2, 50 MHz sampling, 1 µs loop
+// delay, control from 2 ms, gradient projection with step 0.1.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dpc/control/control_law_factory.h"
+#include "dpc/control/control_problem.h"
+#include "dpc/optics/stokes.h"
+#include "dpc/optics/waveplate_stage.h"
+
+namespace dpc {
+
+/// scenario.proto ControlMap.
+struct ControlMapConfig {
+  enum class Kind { kLinear, kPolynomial, kTable };
+  Kind kind = Kind::kLinear;
+  double rad_per_unit = M_PI;              ///< linear: θ = rad_per_unit·φ + offset_rad
+  double offset_rad = 0.0;
+  std::vector<double> coefficients_rad;    ///< polynomial: θ = Σ c_j φ^j, c_0 first
+  std::vector<double> table_control;       ///< table: φ points, strictly increasing
+  std::vector<double> table_angle_rad;     ///< table: θ points, strictly monotonic
+};
+
+/// scenario.proto StageAngle: an adjustable-axis stage's retardance θ or orientation ϕ.
+struct StageAngleConfig {
+  bool controlled = false;       ///< false: fixed at fixed_rad
+  double fixed_rad = 0.0;
+  ControlMapConfig map;          ///< when controlled
+  std::optional<ControlRange> range;
+};
+
+/// scenario.proto Stage.
+struct StageConfig {
+  enum class Kind { kFixedAxis, kAdjustableAxis };
+  Kind kind = Kind::kFixedAxis;
+  std::string name;
+  // Fixed-axis stage.
+  Vector3 axis = Vector3::UnitX();   ///< unit after validation (any non-zero length accepted)
+  ControlMapConfig map;
+  std::optional<ControlRange> range;
+  // Adjustable-axis stage R3(ϕ) R1(θ) R3ᵀ(ϕ).
+  StageAngleConfig retardance;
+  StageAngleConfig orientation;
+};
+
+/// scenario.proto Target.
+struct TargetConfig {
+  enum class Kind { kPoint, kSet };
+  Kind kind = Kind::kPoint;
+  StokesVector point = StokesVector(0.0, 0.6, 0.8);
+  Vector3 normal = Vector3::UnitZ();  ///< set: normal·S = offset
+  double offset = 0.0;
+};
+
+/// scenario.proto Disturbance. Which fields apply depends on the kind.
+struct DisturbanceConfig {
+  enum class Kind { kPaperScrambler, kRandomWalk, kConstantRotation, kTransientBurst };
+  enum class Envelope { kRectangular, kHalfSine };
+  Kind kind = Kind::kPaperScrambler;
+
+  /// paper_scrambler: the constant rotation rate about `axis`; constant_rotation: its rate;
+  /// transient_burst: the peak rate.
+  double rate_rad_per_s = 1e5;
+  /// paper_scrambler: rotation axis (default S3); constant_rotation / transient_burst: the axis.
+  Vector3 axis = Vector3::UnitZ();
+  /// paper_scrambler: the random kick per sample about kick_axis is N(0, σ²) with
+  /// σ = kick_rms_ratio · rate_rad_per_s / sample_rate_hz.
+  double kick_rms_ratio = 1.0;
+  Vector3 kick_axis = Vector3::UnitY();
+  /// random_walk: isotropic rotation diffusion; per sample a rotation vector N(0, D²·dt·I₃).
+  double diffusion_rad_per_sqrt_s = 0.0;
+  /// transient_burst: first burst start, burst length, repetition period (0: once), envelope
+  /// of the rate (peak rate_rad_per_s), and whether each burst picks a random axis.
+  double start_s = 0.0;
+  double duration_s = 0.0;
+  double period_s = 0.0;
+  Envelope envelope = Envelope::kHalfSine;
+  bool random_axis = false;
+};
+
+/// scenario.proto Input.
+struct InputConfig {
+  StokesVector initial_sop = StokesVector::UnitX();
+  /// Applied in order on every sample. Empty: the input SOP holds still.
+  std::vector<DisturbanceConfig> disturbances;
+};
+
+/// scenario.proto Dither (the dithering baseline's own settings).
+struct DitherConfig {
+  double amplitude = 0.02;
+  /// Samples to wait after each probe; 0 = the loop delay in samples.
+  int64_t settle_samples = 0;
+  double reset_threshold = 1.0;
+  double reset_duration_s = 1e-6;
+};
+
+/// scenario.proto Controller.
+struct ControllerConfig {
+  ControlMethod method = ControlMethod::kGradientProjection;
+  double step = 0.1;
+  double nullspace_step = 0.1;
+  double threshold = 1.0;
+  double damping = 1e-3;
+  double singular_value_tolerance = 1e-12;
+  LoopMode loop = LoopMode::kModel;
+  double activation_s = 2e-3;
+  /// φ before activation, one per control; empty = all zero.
+  std::vector<double> initial_phi;
+  DitherConfig dither;
+};
+
+/// scenario.proto Simulation.
+struct SimulationConfig {
+  double sample_rate_hz = 50e6;
+  /// Loop delay: a command computed from the sample at time t acts from t + delay_s. A whole
+  /// number (≥ 1) of sample periods.
+  double delay_s = 1e-6;
+  double duration_s = 10e-3;
+  /// Polarimeter noise: each measured SOP is perturbed by a rotation with independent N(0, σ²)
+  /// components per tangent axis, σ in degrees (0: ideal polarimeters).
+  double polarimeter_noise_deg = 0.0;
+  uint64_t seed = 1;
+  /// Lock: the error stays below this (degrees) from the lock time to the end.
+  double lock_threshold_deg = 10.0;
+  /// Error statistics start here (seconds); unset: at the first lock after activation (or at
+  /// activation if the run never locks).
+  std::optional<double> statistics_start_s;
+};
+
+/// scenario.proto Scenario.
+struct ScenarioConfig {
+  std::string name = "paper";
+  std::string description;
+  std::vector<StageConfig> stages;   ///< empty after defaults means nothing: validation rejects
+  InputConfig input;
+  TargetConfig target;
+  ControllerConfig controller;
+  SimulationConfig simulation;
+};
+
+/// The paper's section IV scenario with `axes` (e.g. "131", "3131"; see
+/// WaveplateChain::FromAxes): linear θ = π·φ stages, the paper scrambler at 100 krad/s.
+ScenarioConfig PaperScenario(const std::string& axes = "131");
+
+/// Fixed-axis stages with θ = π·φ along the elemental axes of `axes` ("131" → S1, S3, S1).
+/// Throws std::invalid_argument for characters other than 1, 2, 3.
+std::vector<StageConfig> StagesFromAxes(const std::string& axes);
+
+}  // namespace dpc

@@ -1,0 +1,86 @@
+#include "dpc/control/control_law_factory.h"
+
+#include <fmt/format.h>
+
+#include <array>
+#include <stdexcept>
+#include <utility>
+
+#include "dpc/control/extended_jacobian_law.h"
+#include "dpc/control/gradient_projection_law.h"
+#include "dpc/control/jacobian_laws.h"
+
+namespace dpc {
+namespace {
+
+constexpr std::array<std::pair<ControlMethod, std::string_view>, 9> kMethodNames{{
+    {ControlMethod::kInverse, "inverse"},
+    {ControlMethod::kTranspose, "transpose"},
+    {ControlMethod::kDamped, "damped"},
+    {ControlMethod::kPseudoInverse, "pinv"},
+    {ControlMethod::kRegularizedLeastSquares, "rls"},
+    {ControlMethod::kGradientProjection, "gp"},
+    {ControlMethod::kThresholdedGradientProjection, "gpt"},
+    {ControlMethod::kExtendedJacobian, "extended"},
+    {ControlMethod::kDither, "dither"},
+}};
+
+}  // namespace
+
+std::string_view MethodName(ControlMethod method) {
+  for (const auto& [m, name] : kMethodNames) {
+    if (m == method) return name;
+  }
+  return "unknown";
+}
+
+std::optional<ControlMethod> ParseMethod(std::string_view name) {
+  for (const auto& [m, method_name] : kMethodNames) {
+    if (method_name == name) return m;
+  }
+  return std::nullopt;
+}
+
+std::string_view MethodNameList() { return "inverse|transpose|damped|pinv|rls|gp|gpt|extended|dither"; }
+
+std::unique_ptr<ControlLaw> MakeControlLaw(const ControlLawConfig& config, int control_count,
+                                           bool point_target) {
+  const auto require_square = [&](std::string_view method) {
+    const int task_rows = point_target ? 3 : 1;
+    if (control_count != task_rows) {
+      throw std::invalid_argument(fmt::format(
+          "method {} inverts a square task matrix: it needs {} control(s) for a {} target "
+          "(this chain has {}); use pinv, rls or gp",
+          method, task_rows, point_target ? "point" : "set", control_count));
+    }
+  };
+  switch (config.method) {
+    case ControlMethod::kInverse:
+      require_square("inverse");
+      return std::make_unique<InverseJacobianLaw>(config.step);
+    case ControlMethod::kTranspose:
+      return std::make_unique<TransposeJacobianLaw>(config.step);
+    case ControlMethod::kDamped:
+      require_square("damped");
+      return std::make_unique<DampedJacobianLaw>(config.step, config.damping);
+    case ControlMethod::kPseudoInverse:
+      return std::make_unique<PseudoInverseLaw>(config.step, config.singular_value_tolerance);
+    case ControlMethod::kRegularizedLeastSquares:
+      return std::make_unique<RegularizedLeastSquaresLaw>(config.step, config.damping);
+    case ControlMethod::kGradientProjection:
+      return std::make_unique<GradientProjectionLaw>(config.step, config.nullspace_step,
+                                                     std::nullopt,
+                                                     config.singular_value_tolerance);
+    case ControlMethod::kThresholdedGradientProjection:
+      return std::make_unique<GradientProjectionLaw>(config.step, config.nullspace_step,
+                                                     config.threshold,
+                                                     config.singular_value_tolerance);
+    case ControlMethod::kExtendedJacobian:
+      return std::make_unique<ExtendedJacobianLaw>(config.step, config.nullspace_step);
+    case ControlMethod::kDither:
+      return std::make_unique<DitheringLaw>(config.step, config.dither);
+  }
+  throw std::invalid_argument("unknown control method");
+}
+
+}  // namespace dpc

@@ -1,0 +1,61 @@
+#pragma once
+// What a control law sees at one sample, and the reduction of the task to its true dimension.
+//
+// Closed loop (paper eq. 5–6): ΔS_out[k] = S* − S_out[k];  φ[k+1] = φ[k] + Δφ[k], with Δφ from
+// the linear model J Δφ = ΔS_out (paper eq. 4).
+//
+// Loop modes (which S_out enters the error):
+//   kModel     S_out = f(φ; S_in measured): the controller computes the output from the model
+//              (the paper: "the output polarimeter is optional").
+//   kMeasured  S_out = the output polarimeter's reading, which lags the command by the loop
+//              delay. The Jacobian is still the model's, at the controller's φ.
+//
+// Task reduction (exact, no SVD). Every column of J is ⊥ S_out (J_c = Ω_c × S_out), so with a
+// right-handed tangent basis (e1, e2, S_out):  J = E·T,  E = [e1 e2],  T = Eᵀ J = [e2ᵀΩ; −e1ᵀΩ]
+// (2 × n), and J⁺ = T⁺Eᵀ. For a point target the task is (T, Eᵀ ΔS) of dimension 2, and every
+// law built on J⁺, Jᵀ or Jᵀ(JJᵀ + λI)⁻¹ gives the same Δφ from it as from (J, ΔS), since
+// JᵀΔS = TᵀEᵀΔS and Jᵀ(JJᵀ + λI)⁻¹ = Tᵀ(TTᵀ + λI)⁻¹Eᵀ on the tangent plane.
+// For a set target n·S = c the task is 1-D: a = nᵀJ = (S_out × n)ᵀΩ (1 × n), e = c − n·S_out.
+
+#include "dpc/control/target.h"
+#include "dpc/optics/waveplate_chain.h"
+
+namespace dpc {
+
+enum class LoopMode { kModel, kMeasured };
+
+/// A d × n task Jacobian, d ≤ 3 (2 for a point target in tangent coordinates, 1 for a set).
+using TaskJacobian = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, kMaxControls>;
+using TaskVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1>;
+
+struct ControlProblem {
+  // ---- Inputs, set by the caller.
+  const WaveplateChain* chain = nullptr;  ///< the device model
+  const Target* target = nullptr;
+  const ChainPose* pose = nullptr;        ///< the chain at the controller's φ (pose->phi)
+  StokesVector s_in = StokesVector::UnitX();            ///< measured input SOP
+  StokesVector s_out_measured = StokesVector::UnitX();  ///< measured output SOP
+  LoopMode loop_mode = LoopMode::kModel;
+
+  // ---- Derived by UpdateControlProblem.
+  ChainKinematics kinematics;     ///< model S_out, Ω, J at pose->phi and s_in
+  StokesVector s_out_for_error;   ///< model or measured S_out, per loop_mode
+  Vector3 tangent_e1, tangent_e2; ///< right-handed tangent basis at the model S_out
+  TaskJacobian task_jacobian;     ///< T (2 × n, point) or nᵀJ (1 × n, set)
+  TaskVector task_error;          ///< Eᵀ(S* − S_out) or c − n·S_out
+
+  const ControlVector& phi() const { return pose->phi; }
+  int control_count() const { return static_cast<int>(pose->phi.size()); }
+  /// Full 3-D error S* − S_out for a point target (paper eq. 5).
+  Vector3 PointError() const { return target->point() - s_out_for_error; }
+};
+
+/// Real-time. Evaluates the chain at problem->pose and s_in, picks the S_out for the error by
+/// loop mode, and builds the reduced task. The inputs must be set.
+void UpdateControlProblem(ControlProblem* problem);
+
+/// Real-time. The task Jacobian of `target` for kinematics `k` at tangent basis (e1, e2).
+void BuildTaskJacobian(const Target& target, const ChainKinematics& k, const Vector3& e1,
+                       const Vector3& e2, TaskJacobian* task_jacobian);
+
+}  // namespace dpc

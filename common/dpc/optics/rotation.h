@@ -1,0 +1,57 @@
+#pragma once
+// Rotations of the Poincaré sphere: the Mueller matrices of lossless waveplates.
+//
+// Elemental rotations by θ about S1, S2, S3, right-hand rule (paper, section II):
+//
+//        | 1   0    0  |         |  c  0  s |         | c  -s  0 |
+//   R1 = | 0   c   -s  |    R2 = |  0  1  0 |    R3 = | s   c  0 |      c = cos θ, s = sin θ
+//        | 0   s    c  |         | -s  0  c |         | 0   0  1 |
+//
+// Rotation about any unit axis r (paper eq. 1, Rodrigues):
+//   M = I + sin θ [r×] + (1 − cos θ) [r×]²,  with [r×] the cross-product matrix of r.
+
+#include "dpc/optics/stokes.h"
+
+namespace dpc {
+
+/// The elemental axes S1, S2, S3; kGeneral marks any other unit axis.
+enum class ElementalAxis : int { kGeneral = 0, kS1 = 1, kS2 = 2, kS3 = 3 };
+
+/// The unit vector of an elemental axis (S1 = [1,0,0], …). Throws for kGeneral.
+Vector3 ElementalAxisVector(ElementalAxis axis);
+
+/// Which elemental axis `axis` is (exactly), or kGeneral.
+ElementalAxis ClassifyAxis(const Vector3& axis);
+
+/// [r×]: the matrix with [r×] v = r × v.
+Matrix3 CrossProductMatrix(const Vector3& r);
+
+/// Paper eq. 1: the rotation by `angle_rad` about the unit axis `axis` (right-hand rule).
+Matrix3 RotationAboutAxis(const Vector3& axis, double angle_rad);
+/// The same from a precomputed cosine and sine of the angle.
+Matrix3 RotationAboutAxis(const Vector3& axis, double cos_angle, double sin_angle);
+
+Matrix3 R1(double angle_rad);
+Matrix3 R2(double angle_rad);
+Matrix3 R3(double angle_rad);
+
+/// Rotates `v` by the angle with cosine `c` and sine `s` about the unit `axis` (Rodrigues on a
+/// vector, ~15 flops): v cos θ + (r × v) sin θ + r (r·v)(1 − cos θ).
+inline Vector3 RotateVector(const Vector3& axis, double c, double s, const Vector3& v) {
+  return c * v + s * axis.cross(v) + ((1.0 - c) * axis.dot(v)) * axis;
+}
+
+/// sin and cos of an angle; for |x| < 2^-7 a Taylor series accurate to about 1 ulp, several
+/// times faster than the library call and is what small per-sample steps hit.
+inline void SinCos(double x, double* s, double* c) {
+  if (x > -0.0078125 && x < 0.0078125) {
+    const double x2 = x * x;
+    // Truncation: x^11/11! < 1e-30 and x^10/10! < 1e-27 for |x| < 2^-7.
+    *s = x * (1.0 + x2 * (-1.0 / 6 + x2 * (1.0 / 120 + x2 * (-1.0 / 5040 + x2 / 362880))));
+    *c = 1.0 + x2 * (-0.5 + x2 * (1.0 / 24 + x2 * (-1.0 / 720 + x2 * (1.0 / 40320))));
+    return;
+  }
+  ::sincos(x, s, c);
+}
+
+}  // namespace dpc

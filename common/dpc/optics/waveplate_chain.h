@@ -1,0 +1,115 @@
+#pragma once
+// An m-stage waveplate chain and its kinematics (paper section II–III).
+//
+// Forward kinematics (paper eq. 2):   S_out = f(φ; S_in) = M_m(φ_m) ⋯ M_1(φ_1) S_in.
+//
+// Closed-form Jacobian (paper eq. 9, J = ∂f/∂φ, 3 × n). Each stage is a product of elemental
+// rotations ("elements") e with unit axis r_e and angle θ_e = σ_e·θ_c(φ_c) (σ_e = ±1, c the
+// control driving it). With the dynamic-eigenstate rule dM/dθ = [r×] M (paper eq. 10):
+//
+//   ∂S_out/∂θ_e = A_e (r_e × S_e) = (A_e r_e) × S_out,    A_e = M_last ⋯ M_(e+1)
+//
+// so, by the chain rule (dθ_c/dφ_c is the stage map's derivative: k for θ = k·φ),
+//
+//   J_c = Ω_c × S_out,   Ω_c = Σ_{e driven by c} σ_e (dθ_c/dφ_c) A_e r_e.
+//
+// Ω (3 × n) are the stages' axes carried to the output frame, scaled by dθ/dφ ("generators").
+// Every column of J is ⊥ S_out, so rank J ≤ 2 whatever m is. For the paper's 3-stage chain
+// this is exactly J = [M3M2(r1×S'), M3(r2×S''), r3×S'''].
+//
+// One backward pass over the elements yields A_e r_e for every e and the full Mueller matrix,
+// hence S_out, Ω and J together (Evaluate). Elemental axes (S1, S2, S3) take a fast path that
+// updates two columns of A instead of a 3 × 3 product.
+//
+// Real-time use: compute a ChainPose once per command (ComputePose: one sin/cos per element),
+// then Output / Evaluate with it. None of these allocate.
+
+#include <array>
+#include <vector>
+
+#include "dpc/optics/rotation.h"
+#include "dpc/optics/waveplate_stage.h"
+
+namespace dpc {
+
+/// The most elemental rotations a chain can have (an adjustable-axis stage has three).
+inline constexpr int kMaxElements = 3 * kMaxStages;
+
+/// The chain's rotation angles at one control vector φ, with their sines and cosines and the
+/// map derivatives dθ/dφ. Fixed-capacity; filled by WaveplateChain::ComputePose.
+struct ChainPose {
+  ControlVector phi;
+  ControlVector dtheta_dphi;  ///< rad per control unit, one per control
+  std::array<double, kMaxElements> angle_rad{};
+  std::array<double, kMaxElements> cos{};
+  std::array<double, kMaxElements> sin{};
+};
+
+/// S_out, the generators Ω and the Jacobian J at one pose and input.
+struct ChainKinematics {
+  StokesVector s_out;
+  Matrix3X generators;  ///< Ω, 3 × n: J_c = Ω_c × S_out
+  Matrix3X jacobian;    ///< J = ∂S_out/∂φ, 3 × n
+};
+
+class WaveplateChain {
+ public:
+  /// Throws std::invalid_argument for 0 stages, more than kMaxStages stages, or more than
+  /// kMaxControls controls.
+  explicit WaveplateChain(std::vector<WaveplateStage> stages);
+
+  /// The paper's devices: one fixed-axis stage per character of `axes` ('1', '2', '3' for S1,
+  /// S2, S3), each with θ = rad_per_unit·φ. Stages are listed in the order the light meets them
+  /// (stage 1 = M_1 first), so "131" is M = R1R3R1 and "3131" is the paper's M = R1R3R1R3.
+  /// Throws for other characters or a length outside 1…kMaxStages.
+  static WaveplateChain FromAxes(const std::string& axes, double rad_per_unit = M_PI);
+
+  int stage_count() const { return static_cast<int>(stages_.size()); }
+  int control_count() const { return static_cast<int>(controls_.size()); }
+  const std::vector<WaveplateStage>& stages() const { return stages_; }
+  const std::vector<ControlChannel>& controls() const { return controls_; }
+  /// The index of the first control of each stage.
+  const std::vector<int>& stage_first_control() const { return stage_first_control_; }
+
+  /// Real-time. Fills `pose` for control vector `phi` (size control_count()).
+  void ComputePose(const ControlVector& phi, ChainPose* pose) const;
+
+  /// Real-time. S_out = f(φ; S_in) (paper eq. 2).
+  StokesVector Output(const ChainPose& pose, const StokesVector& s_in) const;
+
+  /// Real-time. S_out, Ω and J in one backward pass (paper eq. 9).
+  void Evaluate(const ChainPose& pose, const StokesVector& s_in, ChainKinematics* out) const;
+
+  /// The whole chain's Mueller matrix M_m ⋯ M_1.
+  Matrix3 MuellerMatrix(const ChainPose& pose) const;
+
+  /// The SOP entering the chain and after each stage: [S_in, S', S'', …, S_out] (m + 1 entries).
+  std::vector<StokesVector> StageStates(const ChainPose& pose, const StokesVector& s_in) const;
+
+  // Conveniences (not real-time): compute the pose internally.
+  StokesVector Output(const ControlVector& phi, const StokesVector& s_in) const;
+  Matrix3X Jacobian(const ControlVector& phi, const StokesVector& s_in) const;
+
+  /// Clamps each control with a range into it; returns how many were outside.
+  int ClampToRanges(ControlVector* phi) const;
+
+  /// "R1 R3 R1".
+  std::string Describe() const;
+
+ private:
+  struct Element {
+    Vector3 axis;
+    ElementalAxis elemental;
+    int control;       ///< driving control, or -1 for a fixed angle
+    double sign;       ///< θ_e = sign·θ_control
+    double fixed_angle_rad;
+  };
+
+  std::vector<WaveplateStage> stages_;
+  std::vector<ControlChannel> controls_;
+  std::vector<int> stage_first_control_;
+  std::vector<int> stage_end_element_;  ///< one past each stage's last element
+  std::vector<Element> elements_;       ///< in the order the light meets them
+};
+
+}  // namespace dpc
