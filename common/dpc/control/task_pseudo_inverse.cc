@@ -2,77 +2,81 @@
 
 #include <cassert>
 #include <cmath>
+#include <utility>
 
 namespace dpc {
 
 void TaskPseudoInverse::Compute(const TaskJacobian& a) {
   assert(a.rows() == 1 || a.rows() == 2);
-  a_ = &a;
   rows_ = static_cast<int>(a.rows());
-  const int n = static_cast<int>(a.cols());
-  k_.setZero();
+  inverse_sigma_squared_[0] = inverse_sigma_squared_[1] = 0.0;
   if (rows_ == 1) {
-    const double g = a.row(0).squaredNorm();
-    sigma_max_ = sigma_min_ = std::sqrt(g);
+    b_[0] = a.row(0).transpose();
+    const double g = b_[0].squaredNorm();
+    sigma_[0] = std::sqrt(g);
+    sigma_[1] = 0.0;
+    u_.setIdentity();
     rank_ = g > 0.0 ? 1 : 0;
-    if (rank_) k_(0, 0) = 1.0 / g;
+    if (rank_) inverse_sigma_squared_[0] = 1.0 / g;
     return;
   }
   const double g11 = a.row(0).squaredNorm();
   const double g22 = a.row(1).squaredNorm();
   const double g12 = a.row(0).dot(a.row(1));
-  double det = 0.0;  // Cauchy–Binet
-  for (int i = 0; i < n; ++i) {
-    for (int j = i + 1; j < n; ++j) {
-      const double minor = a(0, i) * a(1, j) - a(0, j) * a(1, i);
-      det += minor * minor;
-    }
+  // Jacobi rotation zeroing the off-diagonal of G (Golub & Van Loan, sym. Schur 2 × 2).
+  double c = 1.0, s = 0.0;
+  if (g12 != 0.0) {
+    const double tau = (g22 - g11) / (2.0 * g12);
+    const double t = std::copysign(1.0, tau) / (std::abs(tau) + std::sqrt(1.0 + tau * tau));
+    c = 1.0 / std::sqrt(1.0 + t * t);
+    s = c * t;
   }
-  const double half_trace = 0.5 * (g11 + g22);
-  const double half_gap = std::sqrt(0.25 * (g11 - g22) * (g11 - g22) + g12 * g12);
-  const double lambda1 = half_trace + half_gap;
-  if (!(lambda1 > 0.0)) {
+  u_ << c, s, -s, c;  // u1 = (c, −s), u2 = (s, c)
+  b_[0].noalias() = c * a.row(0).transpose() - s * a.row(1).transpose();
+  b_[1].noalias() = s * a.row(0).transpose() + c * a.row(1).transpose();
+  double n0 = b_[0].squaredNorm(), n1 = b_[1].squaredNorm();
+  if (n1 > n0) {
+    std::swap(b_[0], b_[1]);
+    std::swap(n0, n1);
+    u_.col(0).swap(u_.col(1));
+  }
+  sigma_[0] = std::sqrt(n0);
+  if (!(n0 > 0.0)) {
+    sigma_[1] = 0.0;
     rank_ = 0;
-    sigma_max_ = sigma_min_ = 0.0;
     return;
   }
-  const double lambda2 = det / lambda1;
-  sigma_max_ = std::sqrt(lambda1);
-  sigma_min_ = std::sqrt(lambda2);
-  if (sigma_min_ > relative_tolerance_ * sigma_max_) {
+  // Re-orthogonalize b2 against b1 (removes the round-off of the rotation).
+  b_[1] -= (b_[0].dot(b_[1]) / n0) * b_[0];
+  n1 = b_[1].squaredNorm();
+  sigma_[1] = std::sqrt(n1);
+  inverse_sigma_squared_[0] = 1.0 / n0;
+  if (sigma_[1] > relative_tolerance_ * sigma_[0]) {
     rank_ = 2;
-    k_ << g22, -g12, -g12, g11;
-    k_ /= det;
-    return;
+    inverse_sigma_squared_[1] = 1.0 / n1;
+  } else {
+    rank_ = 1;
   }
-  rank_ = 1;
-  // Eigenvector of λ1: the larger of the two equivalent forms, for conditioning.
-  Eigen::Vector2d u1(lambda1 - g22, g12), u2(g12, lambda1 - g11);
-  Eigen::Vector2d u = u1.squaredNorm() >= u2.squaredNorm() ? u1 : u2;
-  u.normalize();
-  k_ = (u * u.transpose()) / lambda1;
 }
 
 void TaskPseudoInverse::Solve(const TaskVector& e, ControlVector* x) const {
-  const TaskJacobian& a = *a_;
   if (rows_ == 1) {
-    x->noalias() = a.row(0).transpose() * (k_(0, 0) * e[0]);
+    x->noalias() = b_[0] * (e[0] * inverse_sigma_squared_[0]);
     return;
   }
-  const Eigen::Vector2d y = k_ * Eigen::Vector2d(e[0], e[1]);
-  x->noalias() = a.row(0).transpose() * y[0] + a.row(1).transpose() * y[1];
+  const double y0 = (u_(0, 0) * e[0] + u_(1, 0) * e[1]) * inverse_sigma_squared_[0];
+  const double y1 = (u_(0, 1) * e[0] + u_(1, 1) * e[1]) * inverse_sigma_squared_[1];
+  x->noalias() = b_[0] * y0 + b_[1] * y1;
 }
 
 void TaskPseudoInverse::NullSpaceProjection(const ControlVector& v, ControlVector* out) const {
-  const TaskJacobian& a = *a_;
+  const double y0 = b_[0].dot(v) * inverse_sigma_squared_[0];
   if (rows_ == 1) {
-    const double y = k_(0, 0) * a.row(0).dot(v);
-    out->noalias() = v - a.row(0).transpose() * y;
+    out->noalias() = v - b_[0] * y0;
     return;
   }
-  const Eigen::Vector2d av(a.row(0).dot(v), a.row(1).dot(v));
-  const Eigen::Vector2d y = k_ * av;
-  out->noalias() = v - a.row(0).transpose() * y[0] - a.row(1).transpose() * y[1];
+  const double y1 = b_[1].dot(v) * inverse_sigma_squared_[1];
+  out->noalias() = v - b_[0] * y0 - b_[1] * y1;
 }
 
 }  // namespace dpc

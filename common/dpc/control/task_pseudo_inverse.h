@@ -1,18 +1,21 @@
 #pragma once
 // The Moore–Penrose pseudo-inverse of a reduced task Jacobian A (d × n, d = 1 or 2) in closed
-// form: no SVD on the real-time path.
+// form: no iterative SVD on the real-time path.
 //
-//   G = A Aᵀ (d × d).  d = 2: eigenvalues λ1 ≥ λ2 ≥ 0 of G in closed form, with
-//   det G = Σ_{i<j} (a_1i a_2j − a_1j a_2i)² (Cauchy–Binet: a sum of squares, so λ2 = det/λ1
-//   keeps full relative accuracy even when σ2 = √λ2 ≪ σ1).
-//     rank 2 (σ2 > tol·σ1):  A⁺ = Aᵀ G⁻¹
-//     rank 1:                A⁺ = Aᵀ u uᵀ / λ1      (u: unit eigenvector of λ1)
-//     rank 0:                A⁺ = 0
-//   d = 1: A⁺ = Aᵀ / (A Aᵀ), or 0 when A = 0.
+// d = 2, one-sided Jacobi: a single plane rotation U = [u1 u2] of the two rows makes them
+// orthogonal, b_i = u_iᵀ A (the rotation diagonalizes G = AAᵀ: tan 2ϑ = 2 g12 / (g22 − g11)).
+// That is the exact SVD A = Σ σ_i u_i v_iᵀ with σ_i = |b_i|, v_i = b_i / σ_i. Then
 //
-// The singular values of A equal those of the full Jacobian J (A = Eᵀ J with E orthonormal).
-// Solve gives A⁺e; NullSpaceProjection gives (I − A⁺A)v, the projection onto null(A) that
-// gradient projection uses (paper eq. 12). Neither allocates.
+//   A⁺ e        = Σ_i b_i (u_iᵀ e) / σ_i²
+//   (I − A⁺A) v = v − Σ_i b_i (b_iᵀ v) / σ_i²        (projection onto null A, paper eq. 12)
+//
+// over the singular values above relative_tolerance·σ1 (rank 2, 1 or 0). Working on the rows
+// rather than inverting AAᵀ keeps the accuracy of an SVD near singularities (AAᵀ would square
+// the condition number). b2 is re-orthogonalized against b1 so the projector stays idempotent.
+// d = 1: A⁺ = Aᵀ / |A|², or 0 when A = 0.
+//
+// The singular values of the reduced task equal those of the full 3 × n Jacobian (A = EᵀJ with
+// E orthonormal and J's columns in E's span). About 20n flops and 3 square roots; no allocation.
 
 #include "dpc/control/control_problem.h"
 
@@ -20,19 +23,17 @@ namespace dpc {
 
 class TaskPseudoInverse {
  public:
-  /// `relative_tolerance`: singular values below relative_tolerance·σ_max count as zero.
+  /// `relative_tolerance`: singular values at or below relative_tolerance·σ_max count as zero.
   explicit TaskPseudoInverse(double relative_tolerance = 1e-12)
       : relative_tolerance_(relative_tolerance) {}
 
-  /// Real-time. Factorizes `a` (d ≤ 2 rows); keeps a reference to it until the next call.
+  /// Real-time. Factorizes `a` (1 or 2 rows, at most kMaxControls columns).
   void Compute(const TaskJacobian& a);
 
   int rank() const { return rank_; }
-  double sigma_max() const { return sigma_max_; }
+  double sigma_max() const { return sigma_[0]; }
   /// The smallest of the d singular values (σ2 for d = 2, σ1 for d = 1).
-  double sigma_min() const { return sigma_min_; }
-  /// The d × d matrix K with A⁺ = Aᵀ K.
-  const Eigen::Matrix2d& k() const { return k_; }
+  double sigma_min() const { return sigma_[rows_ - 1]; }
 
   /// Real-time. x = A⁺ e.
   void Solve(const TaskVector& e, ControlVector* x) const;
@@ -41,12 +42,12 @@ class TaskPseudoInverse {
 
  private:
   double relative_tolerance_;
-  const TaskJacobian* a_ = nullptr;
-  int rows_ = 0;
+  int rows_ = 1;
   int rank_ = 0;
-  double sigma_max_ = 0.0;
-  double sigma_min_ = 0.0;
-  Eigen::Matrix2d k_ = Eigen::Matrix2d::Zero();
+  double sigma_[2] = {0.0, 0.0};
+  double inverse_sigma_squared_[2] = {0.0, 0.0};  ///< 0 for dropped singular values
+  Eigen::Matrix2d u_ = Eigen::Matrix2d::Identity();  ///< columns u1, u2
+  ControlVector b_[2];                               ///< σ_i v_i
 };
 
 }  // namespace dpc
