@@ -1,0 +1,305 @@
+// Speed of the core: one control update per law (3 and 4 stages), the kinematics, and the
+// closed-loop simulator, each next to a straightforward baseline that computes J⁺ with Eigen's
+// JacobiSVD. Run: build/bench/dpc_benchmark   (Google Benchmark flags work, e.g.
+// --benchmark_filter=Law). After the usual table it prints a summary with the ratios to the
+// SVD baseline and the goals from the core issue (GP update ≤ 100 ns, simulator ≥ 10 M samples/s).
+
+#include <Eigen/SVD>
+#include <benchmark/benchmark.h>
+#include <fmt/format.h>
+
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "dpc/config/scenario_config.h"
+#include "dpc/control/control_law_factory.h"
+#include "dpc/control/control_problem.h"
+#include "dpc/control/gradient_projection_law.h"
+#include "dpc/sim/closed_loop_simulator.h"
+
+namespace dpc {
+namespace {
+
+const Target kPaperTarget = Target::Point(StokesVector(0, 0.6, 0.8));
+
+// The baseline: gradient projection with J⁺ from a JacobiSVD of the full 3 × n Jacobian, as a
+// straightforward implementation of paper eq. 12 would do it.
+class SvdGradientProjectionLaw final : public ControlLaw {
+ public:
+  SvdGradientProjectionLaw(double step, double nullspace_step)
+      : step_(step), nullspace_step_(nullspace_step) {}
+
+  ControlStatus ComputeUpdate(const ControlProblem& p, ControlVector* delta_phi) override {
+    const Eigen::MatrixXd j = p.kinematics.jacobian;
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(j, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    svd.setThreshold(1e-12);
+    const Eigen::VectorXd error = p.PointError();
+    const Eigen::VectorXd phi = p.phi();
+    const Eigen::VectorXd task = svd.solve(error);
+    const Eigen::VectorXd null = phi - svd.solve(j * phi);
+    *delta_phi = step_ * task - nullspace_step_ * null;
+    diagnostics_.nullspace_active = true;
+    return ControlStatus::kOk;
+  }
+  std::string_view name() const override { return "gp-svd"; }
+
+ private:
+  double step_, nullspace_step_;
+};
+
+std::unique_ptr<ControlLaw> MakeSvdBaseline(const ControlLawConfig& c, int, bool) {
+  return std::make_unique<SvdGradientProjectionLaw>(c.step, c.nullspace_step);
+}
+
+// A pool of prepared control problems (random φ and S_in) so each iteration sees a new one.
+class ProblemPool {
+ public:
+  explicit ProblemPool(const std::string& axes, int size = 1024)
+      : chain_(WaveplateChain::FromAxes(axes)), poses_(size), problems_(size) {
+    std::mt19937_64 rng(3);
+    std::normal_distribution<double> normal;
+    for (int i = 0; i < size; ++i) {
+      ControlVector phi(chain_.control_count());
+      for (int c = 0; c < phi.size(); ++c) phi[c] = 0.8 * normal(rng);
+      chain_.ComputePose(phi, &poses_[i]);
+      ControlProblem& p = problems_[i];
+      p.chain = &chain_;
+      p.target = &kPaperTarget;
+      p.pose = &poses_[i];
+      p.s_in = StokesVector(normal(rng), normal(rng), normal(rng)).normalized();
+      p.s_out_measured = chain_.Output(poses_[i], p.s_in);
+      UpdateControlProblem(&p);
+    }
+  }
+  const WaveplateChain& chain() const { return chain_; }
+  std::vector<ChainPose>& poses() { return poses_; }
+  std::vector<ControlProblem>& problems() { return problems_; }
+
+ private:
+  WaveplateChain chain_;
+  std::vector<ChainPose> poses_;
+  std::vector<ControlProblem> problems_;
+};
+
+std::string Axes(int stages) { return stages == 3 ? "131" : "3131"; }
+
+// One law's update on prepared problems: the time a controller spends in the law.
+void BM_LawUpdate(benchmark::State& state, ControlMethod method) {
+  const int stages = static_cast<int>(state.range(0));
+  ProblemPool pool(Axes(stages));
+  ControlLawConfig config;
+  config.method = method;
+  std::unique_ptr<ControlLaw> law = method == ControlMethod::kGradientProjection && state.range(1)
+                                        ? MakeSvdBaseline(config, stages, true)
+                                        : MakeControlLaw(config, stages, true);
+  ControlVector delta;
+  auto& problems = pool.problems();
+  size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(law->ComputeUpdate(problems[i], &delta));
+    benchmark::DoNotOptimize(delta.data());
+    if (++i == problems.size()) i = 0;
+  }
+}
+
+// What a controller does per sample: pose of the new command, kinematics and task, the law.
+void BM_FullControlStep(benchmark::State& state) {
+  const int stages = static_cast<int>(state.range(0));
+  const bool svd = state.range(1) != 0;
+  ProblemPool pool(Axes(stages));
+  ControlLawConfig config;
+  std::unique_ptr<ControlLaw> law =
+      svd ? MakeSvdBaseline(config, stages, true) : MakeControlLaw(config, stages, true);
+  ControlVector delta;
+  ChainPose pose;
+  auto& problems = pool.problems();
+  size_t i = 0;
+  for (auto _ : state) {
+    ControlProblem& p = problems[i];
+    pool.chain().ComputePose(p.pose->phi, &pose);
+    p.pose = &pose;
+    UpdateControlProblem(&p);
+    benchmark::DoNotOptimize(law->ComputeUpdate(p, &delta));
+    p.pose = &pool.poses()[i];
+    if (++i == problems.size()) i = 0;
+  }
+}
+
+void BM_Kinematics(benchmark::State& state) {
+  ProblemPool pool(Axes(static_cast<int>(state.range(0))));
+  ChainKinematics k;
+  auto& problems = pool.problems();
+  size_t i = 0;
+  for (auto _ : state) {
+    pool.chain().Evaluate(*problems[i].pose, problems[i].s_in, &k);
+    benchmark::DoNotOptimize(k.jacobian.data());
+    if (++i == problems.size()) i = 0;
+  }
+}
+
+void BM_ComputePose(benchmark::State& state) {
+  ProblemPool pool(Axes(static_cast<int>(state.range(0))));
+  ChainPose pose;
+  auto& problems = pool.problems();
+  size_t i = 0;
+  for (auto _ : state) {
+    pool.chain().ComputePose(problems[i].pose->phi, &pose);
+    benchmark::DoNotOptimize(pose.cos.data());
+    if (++i == problems.size()) i = 0;
+  }
+}
+
+// The paper scenario in the simulator; reports samples per second.
+void BM_Simulator(benchmark::State& state) {
+  const int stages = static_cast<int>(state.range(0));
+  const bool svd = state.range(1) != 0;
+  ScenarioConfig scenario = PaperScenario(Axes(stages));
+  scenario.simulation.duration_s = 0.02;  // 1e6 samples at 50 MHz
+  scenario.controller.activation_s = 0.0;
+  ClosedLoopSimulator simulator(scenario, svd ? ControlLawFactory(MakeSvdBaseline) : nullptr);
+  int64_t samples = 0;
+  for (auto _ : state) {
+    const SimulationResult r = simulator.Run();
+    samples += r.summary.samples;
+    benchmark::DoNotOptimize(r.summary.error_deg.mean);
+  }
+  state.counters["samples_per_s"] =
+      benchmark::Counter(static_cast<double>(samples), benchmark::Counter::kIsRate);
+}
+
+void RegisterAll() {
+  const std::vector<std::pair<const char*, ControlMethod>> laws{
+      {"transpose", ControlMethod::kTranspose},
+      {"pinv", ControlMethod::kPseudoInverse},
+      {"rls", ControlMethod::kRegularizedLeastSquares},
+      {"gp", ControlMethod::kGradientProjection},
+      {"gpt", ControlMethod::kThresholdedGradientProjection},
+      {"extended", ControlMethod::kExtendedJacobian},
+      {"dither", ControlMethod::kDither},
+  };
+  for (const auto& [name, method] : laws) {
+    benchmark::RegisterBenchmark(fmt::format("Law/{}", name).c_str(), BM_LawUpdate, method)
+        ->Args({3, 0})
+        ->Args({4, 0});
+  }
+  for (const auto& [name, method] :
+       std::vector<std::pair<const char*, ControlMethod>>{{"inverse", ControlMethod::kInverse},
+                                                          {"damped", ControlMethod::kDamped}}) {
+    benchmark::RegisterBenchmark(fmt::format("Law/{}", name).c_str(), BM_LawUpdate, method)
+        ->Args({3, 0});
+  }
+  benchmark::RegisterBenchmark("Law/gp-svd-baseline", BM_LawUpdate,
+                               ControlMethod::kGradientProjection)
+      ->Args({3, 1})
+      ->Args({4, 1});
+  benchmark::RegisterBenchmark("ComputePose", BM_ComputePose)->Arg(3)->Arg(4);
+  benchmark::RegisterBenchmark("Kinematics", BM_Kinematics)->Arg(3)->Arg(4);
+  benchmark::RegisterBenchmark("ControlStep/gp", BM_FullControlStep)->Args({3, 0})->Args({4, 0});
+  benchmark::RegisterBenchmark("ControlStep/gp-svd-baseline", BM_FullControlStep)
+      ->Args({3, 1})
+      ->Args({4, 1});
+  benchmark::RegisterBenchmark("Simulator/gp", BM_Simulator)
+      ->Args({3, 0})
+      ->Args({4, 0})
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("Simulator/gp-svd-baseline", BM_Simulator)
+      ->Args({3, 1})
+      ->Args({4, 1})
+      ->Unit(benchmark::kMillisecond);
+}
+
+// Collects every run for the summary while the console reporter prints as usual.
+class CollectingReporter : public benchmark::ConsoleReporter {
+ public:
+  struct Entry {
+    double ns_per_iteration;
+    double samples_per_s;
+  };
+  void ReportRuns(const std::vector<Run>& runs) override {
+    for (const Run& run : runs) {
+      if (run.run_type != Run::RT_Iteration) continue;
+      Entry e{run.GetAdjustedRealTime() * NanosecondsPer(run.time_unit), 0.0};
+      if (auto it = run.counters.find("samples_per_s"); it != run.counters.end()) {
+        e.samples_per_s = it->second.value;
+      }
+      entries[run.benchmark_name()] = e;
+    }
+    ConsoleReporter::ReportRuns(runs);
+  }
+  std::map<std::string, Entry> entries;
+
+ private:
+  static double NanosecondsPer(benchmark::TimeUnit unit) {
+    switch (unit) {
+      case benchmark::kNanosecond: return 1.0;
+      case benchmark::kMicrosecond: return 1e3;
+      case benchmark::kMillisecond: return 1e6;
+      case benchmark::kSecond: return 1e9;
+    }
+    return 1.0;
+  }
+};
+
+void PrintSummary(const std::map<std::string, CollectingReporter::Entry>& e) {
+  const auto find = [&](const std::string& name) -> const CollectingReporter::Entry* {
+    auto it = e.find(name);
+    return it == e.end() ? nullptr : &it->second;
+  };
+  fmt::print("\nSummary (per-update times; ratio = SVD baseline / this)\n");
+  fmt::print("{:<22} {:>7} {:>12} {:>16} {:>8}\n", "law", "stages", "ns/update", "svd-baseline ns",
+             "ratio");
+  for (const char* law :
+       {"inverse", "transpose", "damped", "pinv", "rls", "gp", "gpt", "extended", "dither"}) {
+    for (int stages : {3, 4}) {
+      const auto* x = find(fmt::format("Law/{}/{}/0", law, stages));
+      const auto* base = find(fmt::format("Law/gp-svd-baseline/{}/1", stages));
+      if (!x || !base) continue;
+      fmt::print("{:<22} {:>7} {:>12.1f} {:>16.1f} {:>7.1f}x\n", law, stages, x->ns_per_iteration,
+                 base->ns_per_iteration, base->ns_per_iteration / x->ns_per_iteration);
+    }
+  }
+  for (int stages : {3, 4}) {
+    const auto* x = find(fmt::format("ControlStep/gp/{}/0", stages));
+    const auto* base = find(fmt::format("ControlStep/gp-svd-baseline/{}/1", stages));
+    if (!x || !base) continue;
+    fmt::print("{:<22} {:>7} {:>12.1f} {:>16.1f} {:>7.1f}x   (pose + kinematics + task + law)\n",
+               "control step (gp)", stages, x->ns_per_iteration, base->ns_per_iteration,
+               base->ns_per_iteration / x->ns_per_iteration);
+  }
+  fmt::print("\n{:<22} {:>7} {:>18} {:>22} {:>8}\n", "simulator", "stages", "M samples/s",
+             "svd-baseline M samples/s", "ratio");
+  for (int stages : {3, 4}) {
+    const auto* x = find(fmt::format("Simulator/gp/{}/0", stages));
+    const auto* base = find(fmt::format("Simulator/gp-svd-baseline/{}/1", stages));
+    if (!x || !base) continue;
+    fmt::print("{:<22} {:>7} {:>18.2f} {:>22.2f} {:>7.1f}x\n", "paper scenario, gp", stages,
+               x->samples_per_s / 1e6, base->samples_per_s / 1e6,
+               x->samples_per_s / base->samples_per_s);
+  }
+  const auto* gp4 = find("Law/gp/4/0");
+  const auto* sim4 = find("Simulator/gp/4/0");
+  fmt::print("\nGoals: 4-stage gp update <= 100 ns (aim 20 ns): {}; simulator >= 10 M samples/s "
+             "(aim 50 M): {}\n",
+             gp4 ? fmt::format("{:.1f} ns {}", gp4->ns_per_iteration,
+                               gp4->ns_per_iteration <= 100 ? "MET" : "MISSED")
+                 : "not run",
+             sim4 ? fmt::format("{:.2f} M samples/s {}", sim4->samples_per_s / 1e6,
+                                sim4->samples_per_s >= 1e7 ? "MET" : "MISSED")
+                  : "not run");
+}
+
+}  // namespace
+}  // namespace dpc
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  dpc::RegisterAll();
+  dpc::CollectingReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  dpc::PrintSummary(reporter.entries);
+  benchmark::Shutdown();
+  return 0;
+}

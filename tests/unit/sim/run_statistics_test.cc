@@ -1,0 +1,101 @@
+#include "dpc/sim/run_statistics.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace dpc {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+ControlVector Phi(double a, double b) {
+  ControlVector v(2);
+  v << a, b;
+  return v;
+}
+
+TEST(RunStatisticsTest, LockTimeIsTheStartOfTheFinalStretchBelowThreshold) {
+  RunStatistics stats(2, 1.0, 10.0, std::nullopt);
+  const double errors_deg[] = {50, 20, 5, 4, 30, 3, 2, 1};  // below at 2, above at 4, below from 5
+  for (int k = 0; k < 8; ++k) {
+    stats.AddSample(1.0 + 0.1 * k, errors_deg[k] * kDeg, 0.0, Phi(0, 0));
+  }
+  const RunSummary s = stats.Summarize(8, 0);
+  ASSERT_TRUE(s.lock_time_s.has_value());
+  EXPECT_NEAR(*s.lock_time_s, 0.5, 1e-12);
+  ASSERT_TRUE(s.first_lock_time_s.has_value());
+  EXPECT_NEAR(*s.first_lock_time_s, 0.2, 1e-12);
+  EXPECT_EQ(s.excursions, 1);
+  // Statistics from the first lock: 5, 4, 30, 3, 2, 1.
+  EXPECT_EQ(s.statistics_samples, 6);
+  EXPECT_NEAR(s.statistics_start_s, 1.2, 1e-12);
+  EXPECT_NEAR(s.error_deg.mean, 45.0 / 6.0, 1e-9);
+  EXPECT_NEAR(s.error_deg.max, 30.0, 1e-9);
+}
+
+TEST(RunStatisticsTest, NoLockWhenTheRunEndsAboveThreshold) {
+  RunStatistics stats(2, 0.0, 10.0, std::nullopt);
+  stats.AddSample(0.0, 5 * kDeg, 0, Phi(0, 0));
+  stats.AddSample(0.1, 50 * kDeg, 0, Phi(0, 0));
+  const RunSummary s = stats.Summarize(2, 0);
+  EXPECT_FALSE(s.lock_time_s.has_value());
+  EXPECT_TRUE(s.first_lock_time_s.has_value());
+}
+
+TEST(RunStatisticsTest, NeverLockedMeansNoErrorStatistics) {
+  RunStatistics stats(2, 0.0, 1.0, std::nullopt);
+  stats.AddSample(0.0, 5 * kDeg, 0, Phi(0, 0));
+  const RunSummary s = stats.Summarize(1, 0);
+  EXPECT_FALSE(s.first_lock_time_s.has_value());
+  EXPECT_EQ(s.statistics_samples, 0);
+  EXPECT_TRUE(std::isnan(s.error_deg.mean));
+}
+
+TEST(RunStatisticsTest, FixedWindowStartAndExtinctionMeans) {
+  RunStatistics stats(2, 0.0, 10.0, 0.15);
+  stats.AddSample(0.1, 50 * kDeg, 0.5, Phi(0, 0));   // before the window
+  stats.AddSample(0.2, 20 * kDeg, 1e-2, Phi(0, 0));  // −20 dB
+  stats.AddSample(0.3, 20 * kDeg, 1e-4, Phi(0, 0));  // −40 dB
+  const RunSummary s = stats.Summarize(3, 0);
+  EXPECT_EQ(s.statistics_samples, 2);
+  EXPECT_NEAR(s.extinction_db_mean, -30.0, 1e-12);
+  EXPECT_NEAR(s.extinction_db_power_mean, 10 * std::log10(0.5 * (1e-2 + 1e-4)), 1e-12);
+}
+
+TEST(RunStatisticsTest, PerfectAlignmentIsFlooredNotMinusInfinity) {
+  RunStatistics stats(2, 0.0, 10.0, 0.0);
+  stats.AddSample(0.0, 0.0, 0.0, Phi(0, 0));
+  EXPECT_NEAR(stats.Summarize(1, 0).extinction_db_mean, -200.0, 1e-9);
+}
+
+TEST(RunStatisticsTest, ControlExtremesAndPercentiles) {
+  RunStatistics stats(2, 0.0, 10.0, std::nullopt);
+  for (int k = 0; k <= 1000; ++k) {
+    stats.AddSample(k * 1e-3, 1 * kDeg, 0, Phi(-1.0 + 0.002 * k, 3.0));
+  }
+  const RunSummary s = stats.Summarize(1001, 0);
+  EXPECT_NEAR(s.phi_min[0], -1.0, 1e-12);
+  EXPECT_NEAR(s.phi_max[0], 1.0, 1e-12);
+  EXPECT_NEAR(s.phi_p1[0], -0.98, 0.01);
+  EXPECT_NEAR(s.phi_p99[0], 0.98, 0.01);
+  EXPECT_NEAR(s.phi_p1[1], 3.0, 1e-9);
+}
+
+TEST(RunStatisticsTest, UpdateCounters) {
+  RunStatistics stats(2, 0.0, 10.0, std::nullopt);
+  stats.AddUpdate(true, false, false, false, 0.5);
+  stats.AddUpdate(false, true, false, false, 0.1);
+  stats.AddUpdate(true, false, true, true, 0.01);
+  const RunSummary s = stats.Summarize(3, 7);
+  EXPECT_EQ(s.updates, 3);
+  EXPECT_NEAR(s.nullspace_active_fraction, 2.0 / 3.0, 1e-15);
+  EXPECT_EQ(s.failed_updates, 1);
+  EXPECT_EQ(s.rank_deficient_updates, 1);
+  EXPECT_EQ(s.clamped_updates, 1);
+  EXPECT_EQ(s.resets, 7);
+  EXPECT_NEAR(s.sigma_min_min, 0.01, 1e-15);
+}
+
+}  // namespace
+}  // namespace dpc

@@ -1,0 +1,153 @@
+#include "json_report.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "dpc/control/control_law_factory.h"
+
+namespace dpc::tools {
+namespace {
+
+nlohmann::ordered_json Number(double value) {
+  if (!std::isfinite(value)) return nullptr;
+  return value;
+}
+
+nlohmann::ordered_json Optional(const std::optional<double>& value) {
+  return value ? Number(*value) : nlohmann::ordered_json(nullptr);
+}
+
+nlohmann::ordered_json Array(const std::vector<double>& values) {
+  nlohmann::ordered_json array = nlohmann::ordered_json::array();
+  for (double v : values) array.push_back(Number(v));
+  return array;
+}
+
+std::string FormatOptional(const std::optional<double>& value, double scale, const char* unit) {
+  return value ? fmt::format("{:.4g} {}", *value * scale, unit) : "never";
+}
+
+std::string FormatList(const std::vector<double>& values) {
+  std::string text;
+  for (double v : values) text += fmt::format("{}{:+.3f}", text.empty() ? "" : " ", v);
+  return text;
+}
+
+}  // namespace
+
+double InputRateRadPerS(const ScenarioConfig& scenario) {
+  for (const auto& d : scenario.input.disturbances) {
+    if (d.kind == DisturbanceConfig::Kind::kPaperScrambler ||
+        d.kind == DisturbanceConfig::Kind::kConstantRotation) {
+      return d.rate_rad_per_s;
+    }
+  }
+  return NAN;
+}
+
+nlohmann::ordered_json RunSettingsJson(const ClosedLoopSimulator& simulator) {
+  const ScenarioConfig& s = simulator.scenario();
+  nlohmann::ordered_json j;
+  j["scenario"] = s.name;
+  j["stages"] = simulator.chain().Describe();
+  j["controls"] = simulator.chain().control_count();
+  j["method"] = std::string(MethodName(s.controller.method));
+  j["loop"] = s.controller.loop == LoopMode::kModel ? "model" : "measured";
+  j["step"] = s.controller.step;
+  j["nullspace_step"] = s.controller.nullspace_step;
+  j["target"] = simulator.target().Describe();
+  j["rate_rad_per_s"] = Number(InputRateRadPerS(s));
+  j["sample_rate_hz"] = s.simulation.sample_rate_hz;
+  j["delay_s"] = s.simulation.delay_s;
+  j["delay_samples"] = simulator.delay_samples();
+  j["duration_s"] = s.simulation.duration_s;
+  j["activation_s"] = s.controller.activation_s;
+  j["polarimeter_noise_deg"] = s.simulation.polarimeter_noise_deg;
+  j["seed"] = s.simulation.seed;
+  return j;
+}
+
+nlohmann::ordered_json RunReportJson(const ClosedLoopSimulator& simulator,
+                                     const SimulationResult& result,
+                                     const std::vector<std::string>& warnings) {
+  const RunSummary& r = result.summary;
+  nlohmann::ordered_json j = RunSettingsJson(simulator);
+  j["samples"] = r.samples;
+  j["samples_per_s"] = Number(result.samples_per_s);
+  j["wall_time_s"] = Number(result.wall_time_s);
+  j["stopped_early"] = result.stopped_early;
+  j["error_deg"] = {{"mean", Number(r.error_deg.mean)},
+                    {"p50", Number(r.error_deg.p50)},
+                    {"p99", Number(r.error_deg.p99)},
+                    {"max", Number(r.error_deg.max)}};
+  j["extinction_db_mean"] = Number(r.extinction_db_mean);
+  j["extinction_db_power_mean"] = Number(r.extinction_db_power_mean);
+  j["lock_threshold_deg"] = simulator.scenario().simulation.lock_threshold_deg;
+  j["lock_time_s"] = Optional(r.lock_time_s);
+  j["first_lock_time_s"] = Optional(r.first_lock_time_s);
+  j["excursions"] = r.excursions;
+  j["statistics_from_s"] = Number(r.statistics_start_s);
+  j["statistics_samples"] = r.statistics_samples;
+  j["phi_min"] = Array(r.phi_min);
+  j["phi_max"] = Array(r.phi_max);
+  j["phi_p1"] = Array(r.phi_p1);
+  j["phi_p99"] = Array(r.phi_p99);
+  j["nullspace_active_fraction"] = Number(r.nullspace_active_fraction);
+  j["resets"] = r.resets;
+  j["updates"] = r.updates;
+  j["failed_updates"] = r.failed_updates;
+  j["rank_deficient_updates"] = r.rank_deficient_updates;
+  j["clamped_updates"] = r.clamped_updates;
+  j["sigma_min_min"] = Number(r.sigma_min_min);
+  j["sigma_min_p1"] = Number(r.sigma_min_p1);
+  nlohmann::ordered_json final_phi = nlohmann::ordered_json::array();
+  for (int i = 0; i < result.final_phi.size(); ++i) final_phi.push_back(Number(result.final_phi[i]));
+  j["final_phi"] = final_phi;
+  j["warnings"] = warnings;
+  return j;
+}
+
+std::string RunReportText(const ClosedLoopSimulator& simulator, const SimulationResult& result) {
+  const ScenarioConfig& s = simulator.scenario();
+  const RunSummary& r = result.summary;
+  std::string text;
+  text += fmt::format("scenario   {} — {} ({} controls), {} loop, method {}, step {:g}",
+                      s.name, simulator.chain().Describe(), simulator.chain().control_count(),
+                      s.controller.loop == LoopMode::kModel ? "model" : "measured",
+                      MethodName(s.controller.method), s.controller.step);
+  if (s.controller.method == ControlMethod::kGradientProjection ||
+      s.controller.method == ControlMethod::kThresholdedGradientProjection ||
+      s.controller.method == ControlMethod::kExtendedJacobian) {
+    text += fmt::format(", null-space step {:g}", s.controller.nullspace_step);
+  }
+  text += fmt::format("\ninput      {:.4g} rad/s, target {}\n", InputRateRadPerS(s),
+                      simulator.target().Describe());
+  text += fmt::format("run        {} samples at {:.4g} MHz, delay {} samples, control from {:.4g} ms"
+                      "{}\n",
+                      r.samples, s.simulation.sample_rate_hz / 1e6, simulator.delay_samples(),
+                      s.controller.activation_s * 1e3, result.stopped_early ? " (stopped early)" : "");
+  text += fmt::format("speed      {:.3g} M samples/s ({:.3g} s)\n", result.samples_per_s / 1e6,
+                      result.wall_time_s);
+  text += fmt::format("lock       {} (first below {:g}° after {}, {} excursions)\n",
+                      FormatOptional(r.lock_time_s, 1e3, "ms after activation"),
+                      s.simulation.lock_threshold_deg, FormatOptional(r.first_lock_time_s, 1e3, "ms"),
+                      r.excursions);
+  text += fmt::format("error      mean {:.3f}°  p50 {:.3f}°  p99 {:.3f}°  max {:.3f}°  "
+                      "(from {:.4g} ms, {} samples)\n",
+                      r.error_deg.mean, r.error_deg.p50, r.error_deg.p99, r.error_deg.max,
+                      r.statistics_start_s * 1e3, r.statistics_samples);
+  text += fmt::format("extinction mean {:.2f} dB, power-averaged {:.2f} dB\n", r.extinction_db_mean,
+                      r.extinction_db_power_mean);
+  text += fmt::format("phi        min [{}]\n           max [{}]\n           p1  [{}]\n"
+                      "           p99 [{}]\n",
+                      FormatList(r.phi_min), FormatList(r.phi_max), FormatList(r.phi_p1),
+                      FormatList(r.phi_p99));
+  text += fmt::format("controller null-space active {:.1f}% of updates, {} failed, {} rank-deficient, "
+                      "{} clamped, {} resets, smallest sigma_min {:.3g}\n",
+                      100.0 * r.nullspace_active_fraction, r.failed_updates,
+                      r.rank_deficient_updates, r.clamped_updates, r.resets, r.sigma_min_min);
+  return text;
+}
+
+}  // namespace dpc::tools

@@ -1,0 +1,36 @@
+// dpc: the command-line tool of the Jacobian DPC project.
+//
+//   dpc sim   [SCENARIO] [flags]   one closed-loop simulation (summary, JSON, trace, figure)
+//   dpc sweep [SCENARIO] [flags]   a grid of simulations over rates, methods and seeds, on all cores
+//   dpc plot  TRACE -o PNG         the paper-style figure from a trace
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include "exit_codes.h"
+#include "plot_command.h"
+#include "sim_command.h"
+#include "sweep_command.h"
+
+int main(int argc, char** argv) {
+  using namespace dpc::tools;
+  CLI::App app{
+      "dpc: Jacobian-based dynamic polarization control (Wang et al.), simulator and tools"};
+  app.require_subcommand(1);
+  SimOptions sim_options;
+  CLI::App* sim = AddSimCommand(app, &sim_options);
+  SweepOptions sweep_options;
+  CLI::App* sweep = AddSweepCommand(app, &sweep_options);
+  PlotOptions plot_options;
+  CLI::App* plot = AddPlotCommand(app, &plot_options);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitInvalidInput;
+  }
+  if (*sim) return RunSimCommand(sim_options);
+  if (*sweep) return RunSweepCommand(sweep_options);
+  if (*plot) return RunPlotCommand(plot_options);
+  return kExitInvalidInput;
+}

@@ -1,0 +1,24 @@
+#include "scenario_loading.h"
+
+#include <fmt/format.h>
+
+#include "dpc/scenario_io/scenario_text.h"
+
+namespace dpc::tools {
+
+ScenarioConfig LoadScenarioWithOverrides(const std::string& path,
+                                         const ScenarioOverrides& overrides) {
+  ScenarioConfig scenario = path.empty() ? PaperScenario("131") : ReadScenarioFile(path);
+  overrides.Apply(&scenario);
+  return scenario;
+}
+
+std::string DescribeScenarioError(const ScenarioError& error, const ScenarioOverrides& overrides) {
+  std::string text = fmt::format("invalid scenario: {}", error.what());
+  if (const auto flag = overrides.FlagForField(error.location())) {
+    text += fmt::format(" (set by {})", *flag);
+  }
+  return text;
+}
+
+}  // namespace dpc::tools

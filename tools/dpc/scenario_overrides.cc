@@ -1,0 +1,130 @@
+#include "scenario_overrides.h"
+
+#include <fmt/format.h>
+
+#include "dpc/config/scenario_error.h"
+
+namespace dpc::tools {
+
+void ScenarioOverrides::AddTo(CLI::App& app) {
+  app.add_option("--stages-axes", stages_axes,
+                 "Replace the device by fixed-axis stages along these axes, in light order, "
+                 "theta = pi*phi (e.g. 131, 3131)");
+  app.add_option("--method", method, "Control law: inverse|transpose|damped|pinv|rls|gp|gpt|"
+                                     "extended|dither");
+  app.add_option("--step", step, "Task step mu");
+  app.add_option("--nullspace-step", nullspace_step, "Null-space step mu_N (gp, gpt, extended)");
+  app.add_option("--threshold", threshold, "|phi_i| above which gpt runs the null-space term");
+  app.add_option("--damping", damping, "Damping lambda (damped, rls)");
+  app.add_option("--loop", loop, "Loop mode: model (S_out from the model) or measured");
+  app.add_option("--activation-s", activation_s, "Control starts at this time (s)");
+  app.add_option("--rate-rad-per-s", rate_rad_per_s,
+                 "Input rotation rate of the scrambler / constant rotation (rad/s)");
+  app.add_flag("--static", static_input, "Hold the input SOP still (no disturbances)");
+  app.add_option("--duration-s", duration_s, "Simulated time (s)");
+  app.add_option("--delay-s", delay_s, "Loop delay (s), a whole number of samples");
+  app.add_option("--sample-rate-hz", sample_rate_hz, "Sample rate (Hz)");
+  app.add_option("--seed", seed, "Random seed");
+  app.add_option("--noise-deg", noise_deg, "Polarimeter noise sigma per tangent axis (deg)");
+  app.add_option("--lock-threshold-deg", lock_threshold_deg,
+                 "Lock: the error stays below this (deg); default 10");
+  app.add_option("--statistics-from-s", statistics_from_s,
+                 "Error statistics from this time (s); default: from the first lock");
+}
+
+void ScenarioOverrides::Apply(ScenarioConfig* s) const {
+  field_to_flag_.clear();
+  const auto set = [this](auto& field, const auto& value, const char* path, const char* flag) {
+    if (value) {
+      field = *value;
+      field_to_flag_[path] = flag;
+    }
+  };
+  if (static_input && rate_rad_per_s) {
+    throw ScenarioError("--static", "contradicts --rate-rad-per-s: a static input has no rate");
+  }
+  if (stages_axes) {
+    try {
+      s->stages = StagesFromAxes(*stages_axes);
+    } catch (const std::invalid_argument& e) {
+      throw ScenarioError("--stages-axes", e.what());
+    }
+    s->controller.initial_phi.clear();
+    field_to_flag_["stages"] = "--stages-axes";
+  }
+  if (method) {
+    const auto parsed = ParseMethod(*method);
+    if (!parsed) {
+      throw ScenarioError("--method", fmt::format("unknown method \"{}\"; use one of {}", *method,
+                                                  MethodNameList()));
+    }
+    s->controller.method = *parsed;
+    field_to_flag_["controller.method"] = "--method";
+  }
+  if (loop) {
+    if (*loop == "model") {
+      s->controller.loop = LoopMode::kModel;
+    } else if (*loop == "measured") {
+      s->controller.loop = LoopMode::kMeasured;
+    } else {
+      throw ScenarioError("--loop", fmt::format("unknown loop mode \"{}\"; use model or measured",
+                                                *loop));
+    }
+  }
+  set(s->controller.step, step, "controller.step", "--step");
+  set(s->controller.nullspace_step, nullspace_step, "controller.nullspace_step",
+      "--nullspace-step");
+  set(s->controller.threshold, threshold, "controller.threshold", "--threshold");
+  set(s->controller.damping, damping, "controller.damping", "--damping");
+  set(s->controller.activation_s, activation_s, "controller.activation_s", "--activation-s");
+  set(s->simulation.duration_s, duration_s, "simulation.duration_s", "--duration-s");
+  set(s->simulation.delay_s, delay_s, "simulation.delay_s", "--delay-s");
+  set(s->simulation.sample_rate_hz, sample_rate_hz, "simulation.sample_rate_hz",
+      "--sample-rate-hz");
+  set(s->simulation.seed, seed, "simulation.seed", "--seed");
+  set(s->simulation.polarimeter_noise_deg, noise_deg, "simulation.polarimeter_noise_deg",
+      "--noise-deg");
+  set(s->simulation.lock_threshold_deg, lock_threshold_deg, "simulation.lock_threshold_deg",
+      "--lock-threshold-deg");
+  if (statistics_from_s) {
+    s->simulation.statistics_start_s = *statistics_from_s;
+    field_to_flag_["simulation.statistics_start_s"] = "--statistics-from-s";
+  }
+  if (static_input) s->input.disturbances.clear();
+  if (rate_rad_per_s) {
+    bool found = false;
+    auto& disturbances = s->input.disturbances;
+    for (size_t i = 0; i < disturbances.size(); ++i) {
+      auto& d = disturbances[i];
+      if (d.kind == DisturbanceConfig::Kind::kPaperScrambler ||
+          d.kind == DisturbanceConfig::Kind::kConstantRotation) {
+        d.rate_rad_per_s = *rate_rad_per_s;
+        const char* kind =
+            d.kind == DisturbanceConfig::Kind::kPaperScrambler ? "paper_scrambler" : "constant_rotation";
+        field_to_flag_[fmt::format("input.disturbances[{}].{}.rate_rad_per_s", i, kind)] =
+            "--rate-rad-per-s";
+        found = true;
+      }
+    }
+    if (!found) {
+      DisturbanceConfig scrambler;
+      scrambler.rate_rad_per_s = *rate_rad_per_s;
+      disturbances.push_back(scrambler);
+      field_to_flag_[fmt::format("input.disturbances[{}].paper_scrambler.rate_rad_per_s",
+                                 disturbances.size() - 1)] = "--rate-rad-per-s";
+    }
+  }
+}
+
+std::optional<std::string> ScenarioOverrides::FlagForField(const std::string& field_path) const {
+  // A path names the flag's field or something inside it (e.g. stages[2].axis_vector).
+  for (const auto& [field, flag] : field_to_flag_) {
+    if (field_path == field || field_path.rfind(field + ".", 0) == 0 ||
+        field_path.rfind(field + "[", 0) == 0) {
+      return flag;
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace dpc::tools

@@ -1,0 +1,55 @@
+#pragma once
+// Command-line flags that override fields of a scenario (`dpc sim`, `dpc sweep`).
+//
+//   --stages-axes 3131      stages ← fixed-axis stages S3, S1, S3, S1 with θ = π·φ (the light
+//                           meets the first character first); clears controller.initial_phi
+//   --method gp             controller.method (inverse|transpose|damped|pinv|rls|gp|gpt|…)
+//   --step, --nullspace-step, --threshold, --damping       controller.*
+//   --loop model|measured   controller.loop
+//   --activation-s          controller.activation_s
+//   --rate-rad-per-s        rate of every paper_scrambler and constant_rotation disturbance;
+//                           adds a paper scrambler if the input has neither
+//   --static                the input SOP holds still (removes every disturbance)
+//   --duration-s, --delay-s, --sample-rate-hz, --seed, --noise-deg, --lock-threshold-deg,
+//   --statistics-from-s     simulation.*
+//
+// Overrides are applied to the plain ScenarioConfig before validation; when validation then
+// rejects a field that a flag set, the message names the flag as well.
+
+#include <CLI/CLI.hpp>
+
+#include <map>
+#include <optional>
+#include <string>
+
+#include "dpc/config/scenario_config.h"
+
+namespace dpc::tools {
+
+struct ScenarioOverrides {
+  std::optional<std::string> stages_axes;
+  std::optional<std::string> method;
+  std::optional<double> step, nullspace_step, threshold, damping, activation_s;
+  std::optional<std::string> loop;
+  std::optional<double> rate_rad_per_s;
+  bool static_input = false;
+  std::optional<double> duration_s, delay_s, sample_rate_hz, noise_deg, lock_threshold_deg,
+      statistics_from_s;
+  std::optional<uint64_t> seed;
+
+  /// Registers the flags on `app`.
+  void AddTo(CLI::App& app);
+
+  /// Applies the set flags to `scenario`. Throws ScenarioError for values that cannot even be
+  /// stored (an unknown method or loop name, bad axes, --static with --rate-rad-per-s).
+  void Apply(ScenarioConfig* scenario) const;
+
+  /// The flag that set the scenario field at `field_path` (e.g. "--step" for
+  /// "controller.step"), if one did.
+  std::optional<std::string> FlagForField(const std::string& field_path) const;
+
+ private:
+  mutable std::map<std::string, std::string> field_to_flag_;
+};
+
+}  // namespace dpc::tools

@@ -1,0 +1,33 @@
+#pragma once
+// `dpc sim [SCENARIO.pbtxt] [flags]`: runs one closed-loop simulation and prints its summary
+// (text, or one JSON object with --json), optionally streaming a trace and drawing the
+// paper-style figure.
+
+#include <CLI/CLI.hpp>
+
+#include <optional>
+#include <string>
+
+#include "scenario_overrides.h"
+
+namespace dpc::tools {
+
+struct SimOptions {
+  std::string scenario_path;
+  ScenarioOverrides overrides;
+  std::string trace_path;
+  int64_t trace_every = 0;  ///< 0: automatic (at most ~200k rows)
+  std::string plot_path;
+  bool json = false;
+  bool progress = false;
+  bool no_progress = false;
+  bool print_scenario = false;
+};
+
+/// Adds the `sim` subcommand to `app`, storing its options in `options`.
+CLI::App* AddSimCommand(CLI::App& app, SimOptions* options);
+
+/// Runs it; returns the process exit code.
+int RunSimCommand(const SimOptions& options);
+
+}  // namespace dpc::tools

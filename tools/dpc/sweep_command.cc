@@ -1,0 +1,198 @@
+#include "sweep_command.h"
+
+#include <fmt/format.h>
+
+#include <atomic>
+#include <cmath>
+#include <csignal>
+#include <fstream>
+#include <iostream>
+#include <map>
+
+#include "dpc/config/scenario_error.h"
+#include "dpc/control/control_law_factory.h"
+#include "dpc/sim/sweep_runner.h"
+#include "exit_codes.h"
+#include "json_report.h"
+#include "paper_figure.h"
+#include "progress_bar.h"
+#include "scenario_loading.h"
+
+namespace dpc::tools {
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void OnSweepInterrupt(int) { g_stop.store(true); }
+
+struct Cell {
+  std::string device, method;
+  double rate_rad_per_s;
+  std::vector<const SimulationResult*> runs;
+  int failed = 0;
+  std::string error;
+};
+
+double Mean(const std::vector<double>& v) {
+  double sum = 0;
+  for (double x : v) sum += x;
+  return v.empty() ? NAN : sum / static_cast<double>(v.size());
+}
+
+}  // namespace
+
+CLI::App* AddSweepCommand(CLI::App& app, SweepOptions* o) {
+  CLI::App* sweep = app.add_subcommand(
+      "sweep", "Simulate a grid of rates x methods x seeds (x devices) on all cores");
+  sweep->add_option("scenario", o->scenario_path, "Base scenario (default: the paper's)")
+      ->check(CLI::ExistingFile);
+  o->overrides.AddTo(*sweep);
+  sweep->add_option("--rates", o->rates_rad_per_s, "Input rotation rates (rad/s), comma separated")
+      ->delimiter(',');
+  sweep->add_option("--methods", o->methods, "Control laws, comma separated")->delimiter(',');
+  sweep->add_option("--seeds", o->seeds, "Seeds, comma separated (default: the scenario's)")
+      ->delimiter(',');
+  sweep->add_option("--devices", o->devices,
+                    "Stage axes per device, comma separated (e.g. 131,3131)")
+      ->delimiter(',');
+  sweep->add_option("--jobs", o->jobs, "Worker threads (default: all cores)");
+  sweep->add_flag("--json", o->json, "Print one JSON object per run (JSON lines)");
+  sweep->add_option("--csv", o->csv_path, "Write the aggregated table as CSV");
+  sweep->add_option("--plot", o->plot_path, "Draw mean error against rate (log-log) to this PNG");
+  sweep->add_flag("--no-progress", o->no_progress, "No progress line");
+  return sweep;
+}
+
+int RunSweepCommand(const SweepOptions& o) {
+  ScenarioConfig base;
+  try {
+    base = LoadScenarioWithOverrides(o.scenario_path, o.overrides);
+  } catch (const ScenarioError& e) {
+    fmt::print(stderr, "dpc sweep: {}\n", DescribeScenarioError(e, o.overrides));
+    return kExitInvalidInput;
+  }
+  std::vector<std::string> devices = o.devices;
+  if (devices.empty()) devices.push_back("");
+  std::vector<std::string> methods = o.methods;
+  if (methods.empty()) methods.push_back(std::string(MethodName(base.controller.method)));
+  std::vector<double> rates = o.rates_rad_per_s;
+  if (rates.empty()) rates.push_back(InputRateRadPerS(base));
+  std::vector<uint64_t> seeds = o.seeds;
+  if (seeds.empty()) seeds.push_back(base.simulation.seed);
+
+  // Build the grid; invalid combinations are reported before anything runs.
+  std::vector<ScenarioConfig> scenarios;
+  std::vector<Cell> cells;
+  std::vector<size_t> cell_of_run;
+  for (const auto& device : devices) {
+    for (const auto& method : methods) {
+      for (double rate : rates) {
+        Cell cell{device, method, rate, {}, 0, {}};
+        for (uint64_t seed : seeds) {
+          ScenarioOverrides grid;
+          if (!device.empty()) grid.stages_axes = device;
+          grid.method = method;
+          if (std::isfinite(rate)) grid.rate_rad_per_s = rate;
+          grid.seed = seed;
+          ScenarioConfig scenario = base;
+          try {
+            grid.Apply(&scenario);
+          } catch (const ScenarioError& e) {
+            fmt::print(stderr, "dpc sweep: {}\n", e.what());
+            return kExitInvalidInput;
+          }
+          scenarios.push_back(std::move(scenario));
+          cell_of_run.push_back(cells.size());
+        }
+        cells.push_back(std::move(cell));
+      }
+    }
+  }
+
+  ProgressBar progress("dpc sweep", !o.no_progress && ProgressBar::StderrIsTerminal());
+  g_stop.store(false);
+  const auto previous_int = std::signal(SIGINT, OnSweepInterrupt);
+  const std::vector<SweepOutcome> outcomes =
+      RunSweep(scenarios, o.jobs, [&](size_t done, size_t total) {
+        progress.Update(static_cast<int64_t>(done), static_cast<int64_t>(total));
+      }, &g_stop);
+  std::signal(SIGINT, previous_int);
+  progress.Finish();
+
+  for (size_t i = 0; i < outcomes.size(); ++i) {
+    Cell& cell = cells[cell_of_run[i]];
+    if (outcomes[i].ok) {
+      cell.runs.push_back(&outcomes[i].result);
+    } else {
+      ++cell.failed;
+      cell.error = outcomes[i].error;
+    }
+    if (o.json && outcomes[i].ok) {
+      // The settings come from a simulator built (cheaply) for the report.
+      const ClosedLoopSimulator simulator(scenarios[i]);
+      std::cout << RunReportJson(simulator, outcomes[i].result, {}).dump() << '\n';
+    }
+  }
+
+  // Table: mean over seeds of each run's statistics.
+  std::string table = fmt::format("{:<8} {:<9} {:>12} {:>5} {:>10} {:>10} {:>10} {:>8} {:>12} {:>10}\n",
+                                  "device", "method", "rate_rad/s", "runs", "mean_deg", "p99_deg",
+                                  "max_deg", "locked", "extinct_dB", "nullsp_%");
+  std::string csv =
+      "device,method,rate_rad_per_s,runs,error_deg_mean,error_deg_p99,error_deg_max,locked_runs,"
+      "extinction_db_mean,nullspace_active_fraction\n";
+  std::map<std::string, RateSeries> series;
+  for (const Cell& cell : cells) {
+    std::vector<double> mean, p99, extinction, nullspace;
+    double max = NAN;
+    int locked = 0;
+    for (const SimulationResult* r : cell.runs) {
+      mean.push_back(r->summary.error_deg.mean);
+      p99.push_back(r->summary.error_deg.p99);
+      extinction.push_back(r->summary.extinction_db_mean);
+      nullspace.push_back(r->summary.nullspace_active_fraction);
+      if (!(r->summary.error_deg.max <= max)) max = r->summary.error_deg.max;
+      locked += r->summary.lock_time_s.has_value();
+    }
+    const std::string device = cell.device.empty() ? "scenario" : cell.device;
+    table += fmt::format("{:<8} {:<9} {:>12.4g} {:>5} {:>10.4f} {:>10.4f} {:>10.4f} {:>5}/{:<2} {:>12.2f} {:>10.1f}",
+                         device, cell.method, cell.rate_rad_per_s, cell.runs.size(), Mean(mean),
+                         Mean(p99), max, locked, cell.runs.size(), Mean(extinction),
+                         100.0 * Mean(nullspace));
+    if (cell.failed) table += fmt::format("  ({} failed: {})", cell.failed, cell.error);
+    table += '\n';
+    csv += fmt::format("{},{},{:.9g},{},{:.9g},{:.9g},{:.9g},{},{:.9g},{:.9g}\n", device,
+                       cell.method, cell.rate_rad_per_s, cell.runs.size(), Mean(mean), Mean(p99),
+                       max, locked, Mean(extinction), Mean(nullspace));
+    RateSeries& s = series[device == "scenario" ? cell.method : device + " " + cell.method];
+    s.label = device == "scenario" ? cell.method : device + " " + cell.method;
+    if (std::isfinite(Mean(mean))) {
+      s.rate_rad_per_s.push_back(cell.rate_rad_per_s);
+      s.error_deg.push_back(Mean(mean));
+    }
+  }
+  if (!o.json) fmt::print("{}", table);
+  try {
+    if (!o.csv_path.empty()) {
+      std::ofstream out(o.csv_path);
+      out << csv;
+      if (!out) throw std::runtime_error("cannot write " + o.csv_path);
+    }
+    if (!o.plot_path.empty()) {
+      std::vector<RateSeries> plot_series;
+      for (auto& [label, s] : series) plot_series.push_back(s);
+      WriteRatePlot(o.plot_path, fmt::format("{}: mean error against input rotation rate",
+                                             base.name),
+                    plot_series);
+      if (!o.json) fmt::print("plot {}\n", o.plot_path);
+    }
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "dpc sweep: {}\n", e.what());
+    return kExitRuntimeError;
+  }
+  for (const Cell& cell : cells) {
+    if (cell.failed) return g_stop.load() ? kExitInterrupted : kExitRuntimeError;
+  }
+  return kExitOk;
+}
+
+}  // namespace dpc::tools

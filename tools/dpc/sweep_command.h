@@ -1,0 +1,32 @@
+#pragma once
+// `dpc sweep [SCENARIO] --rates … --methods … --seeds … [--devices 131,3131]`: simulates every
+// combination on all cores and prints the error against the input rotation rate as a table
+// (mean over seeds), optionally as CSV, JSON lines and a log-log PNG plot.
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+#include <vector>
+
+#include "scenario_overrides.h"
+
+namespace dpc::tools {
+
+struct SweepOptions {
+  std::string scenario_path;
+  ScenarioOverrides overrides;
+  std::vector<double> rates_rad_per_s;
+  std::vector<std::string> methods;
+  std::vector<uint64_t> seeds;
+  std::vector<std::string> devices;
+  int jobs = 0;
+  bool json = false;
+  std::string csv_path;
+  std::string plot_path;
+  bool no_progress = false;
+};
+
+CLI::App* AddSweepCommand(CLI::App& app, SweepOptions* options);
+int RunSweepCommand(const SweepOptions& options);
+
+}  // namespace dpc::tools

@@ -1,0 +1,86 @@
+#include "trace_format.h"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "dpc/control/control_law_factory.h"
+
+namespace dpc::tools {
+namespace {
+
+constexpr const char* kMagic = "dpc-trace";
+
+std::string Title(const ClosedLoopSimulator& simulator) {
+  const ScenarioConfig& s = simulator.scenario();
+  return fmt::format("{}: {}, {}, {} loop", s.name, simulator.chain().Describe(),
+                     MethodName(s.controller.method),
+                     s.controller.loop == LoopMode::kModel ? "model" : "measured");
+}
+
+}  // namespace
+
+std::vector<std::string> TraceHeaderComments(const ClosedLoopSimulator& simulator,
+                                             int64_t trace_every) {
+  const ScenarioConfig& s = simulator.scenario();
+  std::vector<std::string> lines{kMagic, "title=" + Title(simulator),
+                                 fmt::format("activation_s={:.17g}", s.controller.activation_s)};
+  if (simulator.target().is_point()) {
+    const StokesVector& p = simulator.target().point();
+    lines.push_back(fmt::format("target_point={:.17g},{:.17g},{:.17g}", p.x(), p.y(), p.z()));
+  }
+  lines.push_back(fmt::format("sample_rate_hz={:.17g}", s.simulation.sample_rate_hz));
+  lines.push_back(fmt::format("trace_every={}", trace_every));
+  return lines;
+}
+
+FigureOptions FigureOptionsFor(const ClosedLoopSimulator& simulator) {
+  FigureOptions options;
+  options.title = Title(simulator);
+  options.activation_s = simulator.scenario().controller.activation_s;
+  if (simulator.target().is_point()) options.target_point = simulator.target().point();
+  return options;
+}
+
+std::map<std::string, std::string> ReadTraceMetadata(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(fmt::format("cannot read trace {}", path));
+  std::map<std::string, std::string> metadata;
+  std::string line;
+  bool magic = false;
+  while (std::getline(in, line) && line.rfind("# ", 0) == 0) {
+    const std::string body = line.substr(2);
+    if (body == kMagic) {
+      magic = true;
+      continue;
+    }
+    const auto eq = body.find('=');
+    if (eq != std::string::npos) metadata[body.substr(0, eq)] = body.substr(eq + 1);
+  }
+  if (!magic) {
+    throw std::runtime_error(
+        fmt::format("{} is not a dpc trace (no '# {}' line); write one with dpc sim --trace", path,
+                    kMagic));
+  }
+  return metadata;
+}
+
+FigureOptions FigureOptionsFromMetadata(const std::map<std::string, std::string>& metadata) {
+  FigureOptions options;
+  if (auto it = metadata.find("title"); it != metadata.end()) options.title = it->second;
+  if (auto it = metadata.find("activation_s"); it != metadata.end()) {
+    options.activation_s = std::stod(it->second);
+  }
+  if (auto it = metadata.find("target_point"); it != metadata.end()) {
+    std::stringstream ss(it->second);
+    std::string part;
+    std::vector<double> values;
+    while (std::getline(ss, part, ',')) values.push_back(std::stod(part));
+    if (values.size() == 3) options.target_point = StokesVector(values[0], values[1], values[2]);
+  }
+  return options;
+}
+
+}  // namespace dpc::tools
