@@ -8,8 +8,8 @@
 //
 // σ in radians (given in degrees). The angular error |v| is Rayleigh-distributed with scale σ
 // (mean σ·√(π/2), RMS σ·√2) and its direction is uniform; s' is unit when s is. σ = 0 returns
-// s unchanged and draws nothing. Draws come from RandomSource(seed, stream 2), independent of
-// the input SOP's stream.
+// s unchanged and draws nothing. Draws come from RandomSource(seed, stream), independent of
+// the input SOP's stream (1); a bench with two polarimeters gives each its own stream.
 //
 // Measured cost (throwaway timing loop, -O3): ≈ 37 ns per Measure with σ > 0.
 
@@ -23,11 +23,11 @@ namespace dpc {
 
 class PolarimeterNoise {
  public:
-  /// The RandomSource stream the noise uses.
+  /// The default RandomSource stream of the noise.
   static constexpr uint64_t kRandomStream = 2;
 
   /// `sigma_deg` finite and ≥ 0. Throws std::invalid_argument otherwise.
-  PolarimeterNoise(double sigma_deg, uint64_t seed);
+  PolarimeterNoise(double sigma_deg, uint64_t seed, uint64_t stream = kRandomStream);
 
   /// Real-time. A noisy reading of the unit Stokes vector `s`: two normal draws when σ > 0.
   StokesVector Measure(const StokesVector& s) {

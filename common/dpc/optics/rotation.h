@@ -10,6 +10,8 @@
 // Rotation about any unit axis r (paper eq. 1, Rodrigues):
 //   M = I + sin θ [r×] + (1 − cos θ) [r×]²,  with [r×] the cross-product matrix of r.
 
+#include <cmath>
+
 #include "dpc/optics/stokes.h"
 
 namespace dpc {
@@ -51,7 +53,8 @@ inline void SinCos(double x, double* s, double* c) {
     *c = 1.0 + x2 * (-0.5 + x2 * (1.0 / 24 + x2 * (-1.0 / 720 + x2 * (1.0 / 40320))));
     return;
   }
-  ::sincos(x, s, c);
+  *s = std::sin(x);  // GCC merges the pair into one sincos call
+  *c = std::cos(x);
 }
 
 }  // namespace dpc

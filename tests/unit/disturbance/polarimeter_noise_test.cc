@@ -101,3 +101,17 @@ TEST_F(PolarimeterNoiseTest, RejectsNonFiniteSigma) {
 
 }  // namespace
 }  // namespace dpc
+
+namespace dpc {
+namespace {
+
+TEST(PolarimeterNoiseStreamTest, TwoPolarimetersWithOneSeedDrawIndependently) {
+  PolarimeterNoise input(0.5, 7, 2), output(0.5, 7, 3), input_again(0.5, 7, 2);
+  const StokesVector s(0, 0.6, 0.8);
+  const StokesVector a = input.Measure(s), b = output.Measure(s), c = input_again.Measure(s);
+  EXPECT_NE(a, b);
+  EXPECT_EQ(a, c);
+}
+
+}  // namespace
+}  // namespace dpc
