@@ -1,5 +1,7 @@
 #include "dpc/scenario_io/scenario_text.h"
 
+#include <unistd.h>
+
 #include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <google/protobuf/descriptor.h>
@@ -597,7 +599,9 @@ class ScenarioTextFileTest : public ::testing::Test {
     return std::nullopt;
   }
 
-  const std::string path_ = ::testing::TempDir() + "scenario_text_test.pbtxt";
+  // Unique per process: several worktrees may run the suite at once.
+  const std::string path_ =
+      fmt::format("{}scenario_text_test_{}.pbtxt", ::testing::TempDir(), ::getpid());
 };
 
 TEST_F(ScenarioTextFileTest, LoadsAndValidates) {
