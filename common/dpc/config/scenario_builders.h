@@ -1,0 +1,48 @@
+#pragma once
+// Builds the core objects a scenario describes: the stage maps and the waveplate chain, the
+// target, the control-law configuration and the initial control vector.
+//
+// The builders expect a scenario that passed ValidateScenario (scenario_validation.h). Given a
+// bad one they never crash: the core constructors throw std::invalid_argument, and the builders
+// re-throw it as a ScenarioError (also a std::invalid_argument) located at the stage, target or
+// field concerned where they know it.
+
+#include "dpc/config/scenario_config.h"
+#include "dpc/config/scenario_error.h"
+#include "dpc/control/control_law_factory.h"
+#include "dpc/control/target.h"
+#include "dpc/optics/control_map.h"
+#include "dpc/optics/waveplate_chain.h"
+
+namespace dpc {
+
+/// ControlMap::Linear / Polynomial / Table from the config's kind. Throws std::invalid_argument
+/// for an invalid map.
+ControlMap BuildControlMap(const ControlMapConfig& config);
+
+/// One WaveplateStage per config, in order: fixed-axis stages become WaveplateStage::FixedAxis
+/// (axis normalized, map, range), adjustable-axis stages WaveplateStage::AdjustableAxis with
+/// StageAngle::Fixed or StageAngle::Controlled for the retardance and the orientation. Stage
+/// names are passed through. Throws ScenarioError at "stages" (count) or "stages[i]" (a stage
+/// the core rejects).
+WaveplateChain BuildChain(const std::vector<StageConfig>& stages);
+
+/// Target::Point or Target::Set. Throws ScenarioError at "target.point" / "target.set" if the
+/// core rejects it.
+Target BuildTarget(const TargetConfig& config);
+
+/// The law's settings: method, step, nullspace_step, threshold, damping and
+/// singular_value_tolerance copied; dither.amplitude and reset_threshold copied,
+///   dither.settle_samples = controller.dither.settle_samples, or the loop delay in samples
+///                           (DelaySamples) when it is 0;
+///   dither.reset_samples  = max(1, round(reset_duration_s·sample_rate_hz)).
+/// Sample counts saturate at INT_MAX (validation keeps them ≤ 1e7).
+ControlLawConfig BuildControlLawConfig(const ControllerConfig& controller,
+                                       const SimulationConfig& simulation);
+
+/// controller.initial_phi as a ControlVector, or zeros(control_count) when it is empty. Throws
+/// ScenarioError at "controller.initial_phi" if its size is not control_count, or if
+/// control_count is not in [0, kMaxControls].
+ControlVector BuildInitialPhi(const ControllerConfig& controller, int control_count);
+
+}  // namespace dpc

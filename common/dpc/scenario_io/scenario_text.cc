@@ -1,0 +1,576 @@
+#include "dpc/scenario_io/scenario_text.h"
+
+#include <fmt/format.h>
+#include <google/protobuf/io/tokenizer.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
+#include <google/protobuf/text_format.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <utility>
+
+#include "dpc/config/scenario_validation.h"
+
+namespace dpc {
+namespace {
+
+namespace pb = google::protobuf;
+
+// ---------------------------------------------------------------------------------------------
+// Parsing.
+
+/// Keeps the first error the parser reports, with 1-based line and column.
+class FirstErrorCollector final : public pb::io::ErrorCollector {
+ public:
+  void AddError(int line, pb::io::ColumnNumber column, const std::string& message) override {
+    if (error_) return;
+    error_ = Error{line, column, message};
+  }
+
+  struct Error {
+    int line;    ///< 0-based; −1 when the parser has no position
+    int column;  ///< 0-based
+    std::string message;
+  };
+  const std::optional<Error>& error() const { return error_; }
+
+ private:
+  std::optional<Error> error_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Proto → config.
+
+/// "INVERSE, TRANSPOSE, …" for an enum, without its *_UNSPECIFIED value.
+std::string EnumNames(const pb::EnumDescriptor* descriptor) {
+  std::string names;
+  for (int i = 0; i < descriptor->value_count(); ++i) {
+    const pb::EnumValueDescriptor* value = descriptor->value(i);
+    if (value->number() == 0) continue;
+    if (!names.empty()) names += ", ";
+    names += value->name();
+  }
+  return names;
+}
+
+[[noreturn]] void FailEnum(const std::string& path, int number,
+                           const pb::EnumDescriptor* descriptor) {
+  throw ScenarioError(path, fmt::format("{} is not a value of enum {}; use one of {}", number,
+                                        descriptor->name(), EnumNames(descriptor)));
+}
+
+Vector3 VectorFromProto(const scenario::Vector3& v) { return Vector3(v.s1(), v.s2(), v.s3()); }
+
+Vector3 AxisFromEnum(scenario::Axis axis, const Vector3& default_axis, const std::string& path) {
+  switch (axis) {
+    case scenario::AXIS_UNSPECIFIED: return default_axis;
+    case scenario::S1: return Vector3::UnitX();
+    case scenario::S2: return Vector3::UnitY();
+    case scenario::S3: return Vector3::UnitZ();
+    default: FailEnum(path, axis, scenario::Axis_descriptor());
+  }
+}
+
+ControlMapConfig MapFromProto(const scenario::ControlMap& proto) {
+  ControlMapConfig map;  // unset: linear, π rad per unit
+  switch (proto.kind_case()) {
+    case scenario::ControlMap::kLinear:
+      map.kind = ControlMapConfig::Kind::kLinear;
+      if (proto.linear().has_rad_per_unit()) map.rad_per_unit = proto.linear().rad_per_unit();
+      map.offset_rad = proto.linear().offset_rad();
+      break;
+    case scenario::ControlMap::kPolynomial:
+      map.kind = ControlMapConfig::Kind::kPolynomial;
+      map.coefficients_rad.assign(proto.polynomial().coefficients_rad().begin(),
+                                  proto.polynomial().coefficients_rad().end());
+      break;
+    case scenario::ControlMap::kTable:
+      map.kind = ControlMapConfig::Kind::kTable;
+      map.table_control.assign(proto.table().control().begin(), proto.table().control().end());
+      map.table_angle_rad.assign(proto.table().angle_rad().begin(),
+                                 proto.table().angle_rad().end());
+      break;
+    case scenario::ControlMap::KIND_NOT_SET: break;
+  }
+  return map;
+}
+
+ControlRange RangeFromProto(const scenario::ControlRange& proto) {
+  return ControlRange{proto.min(), proto.max()};
+}
+
+StageAngleConfig AngleFromProto(const scenario::StageAngle& proto) {
+  StageAngleConfig angle;  // unset: fixed at 0 rad
+  switch (proto.kind_case()) {
+    case scenario::StageAngle::kFixedRad:
+      angle.controlled = false;
+      angle.fixed_rad = proto.fixed_rad();
+      break;
+    case scenario::StageAngle::kControlled:
+      angle.controlled = true;
+      angle.map = MapFromProto(proto.controlled().map());
+      if (proto.controlled().has_range()) angle.range = RangeFromProto(proto.controlled().range());
+      break;
+    case scenario::StageAngle::KIND_NOT_SET: break;
+  }
+  return angle;
+}
+
+StageConfig StageFromProto(const scenario::Stage& proto, const std::string& path) {
+  StageConfig stage;  // default axis S1, map linear π rad per unit
+  stage.name = proto.name();
+  if (proto.has_adjustable_axis()) {
+    std::string fixed_fields;
+    const auto mention = [&fixed_fields](const char* field) {
+      fixed_fields += fixed_fields.empty() ? field : std::string(", ") + field;
+    };
+    if (proto.axis_kind_case() == scenario::Stage::kAxis) mention("axis");
+    if (proto.axis_kind_case() == scenario::Stage::kAxisVector) mention("axis_vector");
+    if (proto.has_map()) mention("map");
+    if (proto.has_range()) mention("range");
+    if (!fixed_fields.empty()) {
+      throw ScenarioError(path + ".adjustable_axis",
+                          fmt::format("the stage also sets {} of a fixed-axis stage; a stage is "
+                                      "either fixed-axis (axis or axis_vector, map, range) or "
+                                      "adjustable_axis, not both",
+                                      fixed_fields));
+    }
+    stage.kind = StageConfig::Kind::kAdjustableAxis;
+    stage.retardance = AngleFromProto(proto.adjustable_axis().retardance());
+    stage.orientation = AngleFromProto(proto.adjustable_axis().orientation());
+    return stage;
+  }
+  stage.kind = StageConfig::Kind::kFixedAxis;
+  switch (proto.axis_kind_case()) {
+    case scenario::Stage::kAxis:
+      stage.axis = AxisFromEnum(proto.axis(), stage.axis, path + ".axis");
+      break;
+    case scenario::Stage::kAxisVector: stage.axis = VectorFromProto(proto.axis_vector()); break;
+    case scenario::Stage::AXIS_KIND_NOT_SET: break;
+  }
+  stage.map = MapFromProto(proto.map());
+  if (proto.has_range()) stage.range = RangeFromProto(proto.range());
+  return stage;
+}
+
+DisturbanceConfig DisturbanceFromProto(const scenario::Disturbance& proto,
+                                       const std::string& path) {
+  DisturbanceConfig d;  // the struct's defaults are the schema's: 1e5 rad/s, about S3, kicks S2
+  switch (proto.kind_case()) {
+    case scenario::Disturbance::kPaperScrambler: {
+      const scenario::PaperScrambler& p = proto.paper_scrambler();
+      const std::string p_path = path + ".paper_scrambler";
+      d.kind = DisturbanceConfig::Kind::kPaperScrambler;
+      if (p.has_rate_rad_per_s()) d.rate_rad_per_s = p.rate_rad_per_s();
+      if (p.has_kick_rms_ratio()) d.kick_rms_ratio = p.kick_rms_ratio();
+      switch (p.rotation_case()) {
+        case scenario::PaperScrambler::kRotationAxis:
+          d.axis = AxisFromEnum(p.rotation_axis(), d.axis, p_path + ".rotation_axis");
+          break;
+        case scenario::PaperScrambler::kRotationAxisVector:
+          d.axis = VectorFromProto(p.rotation_axis_vector());
+          break;
+        case scenario::PaperScrambler::ROTATION_NOT_SET: break;
+      }
+      switch (p.kick_case()) {
+        case scenario::PaperScrambler::kKickAxis:
+          d.kick_axis = AxisFromEnum(p.kick_axis(), d.kick_axis, p_path + ".kick_axis");
+          break;
+        case scenario::PaperScrambler::kKickAxisVector:
+          d.kick_axis = VectorFromProto(p.kick_axis_vector());
+          break;
+        case scenario::PaperScrambler::KICK_NOT_SET: break;
+      }
+      return d;
+    }
+    case scenario::Disturbance::kRandomWalk:
+      d.kind = DisturbanceConfig::Kind::kRandomWalk;
+      d.diffusion_rad_per_sqrt_s = proto.random_walk().diffusion_rad_per_sqrt_s();
+      return d;
+    case scenario::Disturbance::kConstantRotation: {
+      const scenario::ConstantRotation& p = proto.constant_rotation();
+      d.kind = DisturbanceConfig::Kind::kConstantRotation;
+      if (p.has_rate_rad_per_s()) d.rate_rad_per_s = p.rate_rad_per_s();
+      switch (p.axis_kind_case()) {
+        case scenario::ConstantRotation::kAxis:
+          d.axis = AxisFromEnum(p.axis(), d.axis, path + ".constant_rotation.axis");
+          break;
+        case scenario::ConstantRotation::kAxisVector:
+          d.axis = VectorFromProto(p.axis_vector());
+          break;
+        case scenario::ConstantRotation::AXIS_KIND_NOT_SET: break;
+      }
+      return d;
+    }
+    case scenario::Disturbance::kTransientBurst: {
+      const scenario::TransientBurst& p = proto.transient_burst();
+      const std::string p_path = path + ".transient_burst";
+      d.kind = DisturbanceConfig::Kind::kTransientBurst;
+      d.start_s = p.start_s();
+      d.duration_s = p.duration_s();
+      if (p.has_rate_rad_per_s()) d.rate_rad_per_s = p.rate_rad_per_s();
+      d.period_s = p.period_s();
+      switch (p.envelope()) {
+        case scenario::ENVELOPE_UNSPECIFIED:
+        case scenario::HALF_SINE: d.envelope = DisturbanceConfig::Envelope::kHalfSine; break;
+        case scenario::RECTANGULAR: d.envelope = DisturbanceConfig::Envelope::kRectangular; break;
+        default: FailEnum(p_path + ".envelope", p.envelope(), scenario::Envelope_descriptor());
+      }
+      switch (p.axis_kind_case()) {
+        case scenario::TransientBurst::kAxis:
+          d.axis = AxisFromEnum(p.axis(), d.axis, p_path + ".axis");
+          break;
+        case scenario::TransientBurst::kAxisVector:
+          d.axis = VectorFromProto(p.axis_vector());
+          break;
+        case scenario::TransientBurst::kRandomAxis: d.random_axis = p.random_axis(); break;
+        case scenario::TransientBurst::AXIS_KIND_NOT_SET: break;
+      }
+      return d;
+    }
+    case scenario::Disturbance::KIND_NOT_SET: break;
+  }
+  throw ScenarioError(path, "the disturbance has no kind; set one of paper_scrambler, "
+                            "random_walk, constant_rotation, transient_burst");
+}
+
+ControlMethod MethodFromProto(scenario::Method method) {
+  switch (method) {
+    case scenario::METHOD_UNSPECIFIED:
+    case scenario::GP: return ControlMethod::kGradientProjection;
+    case scenario::INVERSE: return ControlMethod::kInverse;
+    case scenario::TRANSPOSE: return ControlMethod::kTranspose;
+    case scenario::DAMPED: return ControlMethod::kDamped;
+    case scenario::PINV: return ControlMethod::kPseudoInverse;
+    case scenario::RLS: return ControlMethod::kRegularizedLeastSquares;
+    case scenario::GPT: return ControlMethod::kThresholdedGradientProjection;
+    case scenario::EXTENDED: return ControlMethod::kExtendedJacobian;
+    case scenario::DITHER: return ControlMethod::kDither;
+    default: FailEnum("controller.method", method, scenario::Method_descriptor());
+  }
+}
+
+ControllerConfig ControllerFromProto(const scenario::Controller& p) {
+  ControllerConfig c;
+  c.method = MethodFromProto(p.method());
+  if (p.has_step()) c.step = p.step();
+  if (p.has_nullspace_step()) c.nullspace_step = p.nullspace_step();
+  if (p.has_threshold()) c.threshold = p.threshold();
+  if (p.has_damping()) c.damping = p.damping();
+  if (p.has_singular_value_tolerance()) c.singular_value_tolerance = p.singular_value_tolerance();
+  switch (p.loop()) {
+    case scenario::LOOP_MODE_UNSPECIFIED:
+    case scenario::MODEL: c.loop = LoopMode::kModel; break;
+    case scenario::MEASURED: c.loop = LoopMode::kMeasured; break;
+    default: FailEnum("controller.loop", p.loop(), scenario::LoopMode_descriptor());
+  }
+  if (p.has_activation_s()) c.activation_s = p.activation_s();
+  c.initial_phi.assign(p.initial_phi().begin(), p.initial_phi().end());
+  const scenario::Dither& dither = p.dither();
+  if (dither.has_amplitude()) c.dither.amplitude = dither.amplitude();
+  if (dither.has_settle_samples()) c.dither.settle_samples = dither.settle_samples();
+  if (dither.has_reset_threshold()) c.dither.reset_threshold = dither.reset_threshold();
+  if (dither.has_reset_duration_s()) c.dither.reset_duration_s = dither.reset_duration_s();
+  return c;
+}
+
+SimulationConfig SimulationFromProto(const scenario::Simulation& p) {
+  SimulationConfig s;
+  if (p.has_sample_rate_hz()) s.sample_rate_hz = p.sample_rate_hz();
+  if (p.has_delay_s()) s.delay_s = p.delay_s();
+  if (p.has_duration_s()) s.duration_s = p.duration_s();
+  if (p.has_polarimeter_noise_deg()) s.polarimeter_noise_deg = p.polarimeter_noise_deg();
+  if (p.has_seed()) s.seed = p.seed();
+  if (p.has_lock_threshold_deg()) s.lock_threshold_deg = p.lock_threshold_deg();
+  if (p.has_statistics_start_s()) s.statistics_start_s = p.statistics_start_s();
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Config → proto.
+
+void VectorToProto(const Vector3& v, scenario::Vector3* proto) {
+  proto->set_s1(v.x());
+  proto->set_s2(v.y());
+  proto->set_s3(v.z());
+}
+
+/// S1, S2 or S3 if `v` is exactly that unit vector.
+std::optional<scenario::Axis> ElementalAxis(const Vector3& v) {
+  if (v == Vector3::UnitX()) return scenario::S1;
+  if (v == Vector3::UnitY()) return scenario::S2;
+  if (v == Vector3::UnitZ()) return scenario::S3;
+  return std::nullopt;
+}
+
+void MapToProto(const ControlMapConfig& map, scenario::ControlMap* proto) {
+  switch (map.kind) {
+    case ControlMapConfig::Kind::kLinear:
+      proto->mutable_linear()->set_rad_per_unit(map.rad_per_unit);
+      proto->mutable_linear()->set_offset_rad(map.offset_rad);
+      return;
+    case ControlMapConfig::Kind::kPolynomial: {
+      auto* coefficients = proto->mutable_polynomial()->mutable_coefficients_rad();
+      coefficients->Add(map.coefficients_rad.begin(), map.coefficients_rad.end());
+      return;
+    }
+    case ControlMapConfig::Kind::kTable: {
+      auto* table = proto->mutable_table();
+      table->mutable_control()->Add(map.table_control.begin(), map.table_control.end());
+      table->mutable_angle_rad()->Add(map.table_angle_rad.begin(), map.table_angle_rad.end());
+      return;
+    }
+  }
+}
+
+void RangeToProto(const ControlRange& range, scenario::ControlRange* proto) {
+  proto->set_min(range.min);
+  proto->set_max(range.max);
+}
+
+void AngleToProto(const StageAngleConfig& angle, scenario::StageAngle* proto) {
+  if (!angle.controlled) {
+    proto->set_fixed_rad(angle.fixed_rad);
+    return;
+  }
+  scenario::ControlledAngle* controlled = proto->mutable_controlled();
+  MapToProto(angle.map, controlled->mutable_map());
+  if (angle.range) RangeToProto(*angle.range, controlled->mutable_range());
+}
+
+void StageToProto(const StageConfig& stage, scenario::Stage* proto) {
+  proto->set_name(stage.name);
+  if (stage.kind == StageConfig::Kind::kAdjustableAxis) {
+    AngleToProto(stage.retardance, proto->mutable_adjustable_axis()->mutable_retardance());
+    AngleToProto(stage.orientation, proto->mutable_adjustable_axis()->mutable_orientation());
+    return;
+  }
+  if (const auto axis = ElementalAxis(stage.axis)) {
+    proto->set_axis(*axis);
+  } else {
+    VectorToProto(stage.axis, proto->mutable_axis_vector());
+  }
+  MapToProto(stage.map, proto->mutable_map());
+  if (stage.range) RangeToProto(*stage.range, proto->mutable_range());
+}
+
+void DisturbanceToProto(const DisturbanceConfig& d, scenario::Disturbance* proto) {
+  switch (d.kind) {
+    case DisturbanceConfig::Kind::kPaperScrambler: {
+      scenario::PaperScrambler* p = proto->mutable_paper_scrambler();
+      p->set_rate_rad_per_s(d.rate_rad_per_s);
+      p->set_kick_rms_ratio(d.kick_rms_ratio);
+      if (const auto axis = ElementalAxis(d.axis)) {
+        p->set_rotation_axis(*axis);
+      } else {
+        VectorToProto(d.axis, p->mutable_rotation_axis_vector());
+      }
+      if (const auto axis = ElementalAxis(d.kick_axis)) {
+        p->set_kick_axis(*axis);
+      } else {
+        VectorToProto(d.kick_axis, p->mutable_kick_axis_vector());
+      }
+      return;
+    }
+    case DisturbanceConfig::Kind::kRandomWalk:
+      proto->mutable_random_walk()->set_diffusion_rad_per_sqrt_s(d.diffusion_rad_per_sqrt_s);
+      return;
+    case DisturbanceConfig::Kind::kConstantRotation: {
+      scenario::ConstantRotation* p = proto->mutable_constant_rotation();
+      p->set_rate_rad_per_s(d.rate_rad_per_s);
+      if (const auto axis = ElementalAxis(d.axis)) {
+        p->set_axis(*axis);
+      } else {
+        VectorToProto(d.axis, p->mutable_axis_vector());
+      }
+      return;
+    }
+    case DisturbanceConfig::Kind::kTransientBurst: {
+      scenario::TransientBurst* p = proto->mutable_transient_burst();
+      p->set_start_s(d.start_s);
+      p->set_duration_s(d.duration_s);
+      p->set_rate_rad_per_s(d.rate_rad_per_s);
+      p->set_period_s(d.period_s);
+      p->set_envelope(d.envelope == DisturbanceConfig::Envelope::kRectangular
+                          ? scenario::RECTANGULAR
+                          : scenario::HALF_SINE);
+      if (d.random_axis) {
+        p->set_random_axis(true);
+      } else if (const auto axis = ElementalAxis(d.axis)) {
+        p->set_axis(*axis);
+      } else {
+        VectorToProto(d.axis, p->mutable_axis_vector());
+      }
+      return;
+    }
+  }
+}
+
+scenario::Method MethodToProto(ControlMethod method) {
+  switch (method) {
+    case ControlMethod::kInverse: return scenario::INVERSE;
+    case ControlMethod::kTranspose: return scenario::TRANSPOSE;
+    case ControlMethod::kDamped: return scenario::DAMPED;
+    case ControlMethod::kPseudoInverse: return scenario::PINV;
+    case ControlMethod::kRegularizedLeastSquares: return scenario::RLS;
+    case ControlMethod::kGradientProjection: return scenario::GP;
+    case ControlMethod::kThresholdedGradientProjection: return scenario::GPT;
+    case ControlMethod::kExtendedJacobian: return scenario::EXTENDED;
+    case ControlMethod::kDither: return scenario::DITHER;
+  }
+  return scenario::METHOD_UNSPECIFIED;
+}
+
+void ControllerToProto(const ControllerConfig& c, scenario::Controller* p) {
+  p->set_method(MethodToProto(c.method));
+  p->set_step(c.step);
+  p->set_nullspace_step(c.nullspace_step);
+  p->set_threshold(c.threshold);
+  p->set_damping(c.damping);
+  p->set_singular_value_tolerance(c.singular_value_tolerance);
+  p->set_loop(c.loop == LoopMode::kMeasured ? scenario::MEASURED : scenario::MODEL);
+  p->set_activation_s(c.activation_s);
+  p->mutable_initial_phi()->Add(c.initial_phi.begin(), c.initial_phi.end());
+  scenario::Dither* dither = p->mutable_dither();
+  dither->set_amplitude(c.dither.amplitude);
+  dither->set_settle_samples(c.dither.settle_samples);
+  dither->set_reset_threshold(c.dither.reset_threshold);
+  dither->set_reset_duration_s(c.dither.reset_duration_s);
+}
+
+void SimulationToProto(const SimulationConfig& s, scenario::Simulation* p) {
+  p->set_sample_rate_hz(s.sample_rate_hz);
+  p->set_delay_s(s.delay_s);
+  p->set_duration_s(s.duration_s);
+  p->set_polarimeter_noise_deg(s.polarimeter_noise_deg);
+  p->set_seed(s.seed);
+  p->set_lock_threshold_deg(s.lock_threshold_deg);
+  if (s.statistics_start_s) p->set_statistics_start_s(*s.statistics_start_s);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Files.
+
+std::string ReadScenarioFile(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw ScenarioError(path, "is a directory; expected a scenario file (.pbtxt)");
+  }
+  std::ifstream file(path, std::ios::binary);
+  if (!file) {
+    throw ScenarioError(path, fmt::format("cannot open the scenario file: {}",
+                                          std::strerror(errno)));
+  }
+  std::string text;
+  char buffer[1 << 16];
+  while (file.read(buffer, sizeof buffer) || file.gcount() > 0) {
+    text.append(buffer, static_cast<size_t>(file.gcount()));
+    if (text.size() > kMaxScenarioTextBytes) {
+      throw ScenarioError(path, fmt::format("the scenario file is larger than {} bytes (16 MiB); "
+                                            "a scenario is a small text file",
+                                            kMaxScenarioTextBytes));
+    }
+  }
+  if (file.bad()) {
+    throw ScenarioError(path, fmt::format("cannot read the scenario file: {}",
+                                          std::strerror(errno)));
+  }
+  return text;
+}
+
+}  // namespace
+
+scenario::Scenario ParseScenarioText(std::string_view text, const std::string& source_name) {
+  if (text.size() > kMaxScenarioTextBytes) {
+    throw ScenarioError(source_name,
+                        fmt::format("the scenario text has {} bytes; at most {} (16 MiB)",
+                                    text.size(), kMaxScenarioTextBytes));
+  }
+  FirstErrorCollector errors;
+  pb::TextFormat::Parser parser;
+  parser.RecordErrorsTo(&errors);
+  pb::io::ArrayInputStream input(text.data(), static_cast<int>(text.size()));
+  scenario::Scenario proto;
+  if (!parser.Parse(&input, &proto)) {
+    if (!errors.error()) throw ScenarioError(source_name, "not a valid scenario text");
+    const auto& error = *errors.error();
+    const std::string location =
+        error.line < 0 ? source_name
+                       : fmt::format("{}:{}:{}", source_name, error.line + 1, error.column + 1);
+    throw ScenarioError(location, error.message);
+  }
+  return proto;
+}
+
+ScenarioConfig ScenarioFromProto(const scenario::Scenario& proto) {
+  ScenarioConfig config;
+  if (!proto.name().empty()) config.name = proto.name();
+  config.description = proto.description();
+  for (int i = 0; i < proto.stages_size(); ++i) {
+    config.stages.push_back(StageFromProto(proto.stages(i), fmt::format("stages[{}]", i)));
+  }
+  if (proto.input().has_initial_sop()) {
+    config.input.initial_sop = VectorFromProto(proto.input().initial_sop());
+  }
+  for (int k = 0; k < proto.input().disturbances_size(); ++k) {
+    config.input.disturbances.push_back(DisturbanceFromProto(
+        proto.input().disturbances(k), fmt::format("input.disturbances[{}]", k)));
+  }
+  const scenario::Target& target = proto.target();
+  switch (target.kind_case()) {
+    case scenario::Target::kPoint:
+      config.target.kind = TargetConfig::Kind::kPoint;
+      config.target.point = VectorFromProto(target.point());
+      break;
+    case scenario::Target::kSet:
+      config.target.kind = TargetConfig::Kind::kSet;
+      if (target.set().has_normal()) config.target.normal = VectorFromProto(target.set().normal());
+      config.target.offset = target.set().offset();
+      break;
+    case scenario::Target::KIND_NOT_SET: break;  // the default point [0, 0.6, 0.8]
+  }
+  config.controller = ControllerFromProto(proto.controller());
+  config.simulation = SimulationFromProto(proto.simulation());
+  return config;
+}
+
+scenario::Scenario ScenarioToProto(const ScenarioConfig& config) {
+  scenario::Scenario proto;
+  proto.set_name(config.name);
+  proto.set_description(config.description);
+  for (const StageConfig& stage : config.stages) StageToProto(stage, proto.add_stages());
+  VectorToProto(config.input.initial_sop, proto.mutable_input()->mutable_initial_sop());
+  for (const DisturbanceConfig& d : config.input.disturbances) {
+    DisturbanceToProto(d, proto.mutable_input()->add_disturbances());
+  }
+  if (config.target.kind == TargetConfig::Kind::kPoint) {
+    VectorToProto(config.target.point, proto.mutable_target()->mutable_point());
+  } else {
+    scenario::LinearSet* set = proto.mutable_target()->mutable_set();
+    VectorToProto(config.target.normal, set->mutable_normal());
+    set->set_offset(config.target.offset);
+  }
+  ControllerToProto(config.controller, proto.mutable_controller());
+  SimulationToProto(config.simulation, proto.mutable_simulation());
+  return proto;
+}
+
+std::string ScenarioToText(const ScenarioConfig& config) {
+  std::string text;
+  if (!pb::TextFormat::PrintToString(ScenarioToProto(config), &text)) {
+    throw ScenarioError(config.name, "cannot print the scenario as text");
+  }
+  return text;
+}
+
+ScenarioConfig LoadScenarioFile(const std::string& path) {
+  const std::string text = ReadScenarioFile(path);
+  ScenarioConfig config = ScenarioFromProto(ParseScenarioText(text, path));
+  ValidateScenario(config);
+  return config;
+}
+
+}  // namespace dpc

@@ -1,0 +1,246 @@
+#include "dpc/config/scenario_builders.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "dpc/config/scenario_validation.h"
+
+namespace dpc {
+namespace {
+
+constexpr double kTight = 1e-15;
+
+class ScenarioBuildersTest : public ::testing::Test {
+ protected:
+  static StageConfig AdjustableStage(bool retardance_controlled, bool orientation_controlled) {
+    StageConfig stage;
+    stage.kind = StageConfig::Kind::kAdjustableAxis;
+    stage.name = "converter";
+    stage.retardance.controlled = retardance_controlled;
+    stage.retardance.fixed_rad = M_PI / 2;
+    stage.orientation.controlled = orientation_controlled;
+    stage.orientation.map.rad_per_unit = 2.0;
+    stage.orientation.range = ControlRange{-3.0, 3.0};
+    return stage;
+  }
+
+  ScenarioConfig scenario_ = PaperScenario("131");
+};
+
+TEST_F(ScenarioBuildersTest, LinearMap) {
+  ControlMapConfig config;
+  config.rad_per_unit = 2.0;
+  config.offset_rad = 0.5;
+  const ControlMap map = BuildControlMap(config);
+  EXPECT_EQ(map.kind(), ControlMap::Kind::kLinear);
+  EXPECT_NEAR(map.AngleRad(0.25), 1.0, kTight);
+}
+
+TEST_F(ScenarioBuildersTest, PolynomialMap) {
+  ControlMapConfig config;
+  config.kind = ControlMapConfig::Kind::kPolynomial;
+  config.coefficients_rad = {0.1, 2.0, 0.5};
+  const ControlMap map = BuildControlMap(config);
+  EXPECT_EQ(map.kind(), ControlMap::Kind::kPolynomial);
+  EXPECT_NEAR(map.AngleRad(2.0), 0.1 + 4.0 + 2.0, kTight);
+}
+
+TEST_F(ScenarioBuildersTest, TableMap) {
+  ControlMapConfig config;
+  config.kind = ControlMapConfig::Kind::kTable;
+  config.table_control = {0.0, 1.0, 2.0};
+  config.table_angle_rad = {0.0, 1.0, 3.0};
+  const ControlMap map = BuildControlMap(config);
+  EXPECT_EQ(map.kind(), ControlMap::Kind::kTable);
+  EXPECT_NEAR(map.AngleRad(1.5), 2.0, kTight);
+}
+
+TEST_F(ScenarioBuildersTest, BadMapThrowsInvalidArgument) {
+  ControlMapConfig config;
+  config.rad_per_unit = 0.0;
+  EXPECT_THROW(BuildControlMap(config), std::invalid_argument);
+}
+
+TEST_F(ScenarioBuildersTest, PaperChainMatchesFromAxes) {
+  const WaveplateChain chain = BuildChain(scenario_.stages);
+  const WaveplateChain reference = WaveplateChain::FromAxes("131");
+  EXPECT_EQ(chain.Describe(), reference.Describe());
+  ASSERT_EQ(chain.control_count(), 3);
+  ControlVector phi(3);
+  phi << 0.3, -0.7, 1.1;
+  const StokesVector s_in = StokesVector(0.48, 0.6, 0.64);
+  EXPECT_LT((chain.Output(phi, s_in) - reference.Output(phi, s_in)).norm(), kTight);
+}
+
+TEST_F(ScenarioBuildersTest, FixedAxisStageKeepsMapRangeAndName) {
+  scenario_.stages[1].axis = Vector3(0.0, 3.0, 4.0);
+  scenario_.stages[1].range = ControlRange{-1.5, 2.5};
+  scenario_.stages[1].name = "middle";
+  scenario_.stages[1].map.rad_per_unit = 2.0;
+  const WaveplateChain chain = BuildChain(scenario_.stages);
+  const WaveplateStage& stage = chain.stages()[1];
+  EXPECT_EQ(stage.kind(), WaveplateStage::Kind::kFixedAxis);
+  EXPECT_EQ(stage.name(), "middle");
+  EXPECT_LT((stage.axis() - Vector3(0.0, 0.6, 0.8)).norm(), kTight);
+  ASSERT_EQ(stage.controls().size(), 1u);
+  ASSERT_TRUE(stage.controls()[0].range.has_value());
+  EXPECT_EQ(stage.controls()[0].range->min, -1.5);
+  EXPECT_EQ(stage.controls()[0].range->max, 2.5);
+  EXPECT_NEAR(stage.controls()[0].map.linear_rad_per_unit(), 2.0, kTight);
+}
+
+TEST_F(ScenarioBuildersTest, AdjustableAxisStagesBuildFixedAndControlledAngles) {
+  scenario_.stages = {AdjustableStage(false, true), AdjustableStage(true, true)};
+  const WaveplateChain chain = BuildChain(scenario_.stages);
+  ASSERT_EQ(chain.stage_count(), 2);
+  EXPECT_EQ(chain.control_count(), 3);
+  const WaveplateStage& quarter_wave = chain.stages()[0];
+  EXPECT_EQ(quarter_wave.kind(), WaveplateStage::Kind::kAdjustableAxis);
+  EXPECT_EQ(quarter_wave.name(), "converter");
+  EXPECT_FALSE(quarter_wave.retardance().control.has_value());
+  EXPECT_NEAR(quarter_wave.retardance().fixed_angle_rad, M_PI / 2, kTight);
+  ASSERT_TRUE(quarter_wave.orientation().control.has_value());
+  EXPECT_NEAR(quarter_wave.orientation().control->map.linear_rad_per_unit(), 2.0, kTight);
+  ASSERT_TRUE(quarter_wave.orientation().control->range.has_value());
+  EXPECT_EQ(quarter_wave.orientation().control->range->max, 3.0);
+  EXPECT_TRUE(chain.stages()[1].retardance().control.has_value());
+}
+
+TEST_F(ScenarioBuildersTest, BadStageThrowsLocatedError) {
+  scenario_.stages[1].axis = Vector3::Zero();
+  EXPECT_THROW(BuildChain(scenario_.stages), ScenarioError);
+  try {
+    BuildChain(scenario_.stages);
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(e.location(), "stages[1]");
+  }
+}
+
+TEST_F(ScenarioBuildersTest, EmptyChainThrowsLocatedError) {
+  EXPECT_THROW(BuildChain({}), ScenarioError);
+  try {
+    BuildChain({});
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(e.location(), "stages");
+  }
+}
+
+TEST_F(ScenarioBuildersTest, PointTarget) {
+  const Target target = BuildTarget(scenario_.target);
+  EXPECT_TRUE(target.is_point());
+  EXPECT_LT((target.point() - StokesVector(0.0, 0.6, 0.8)).norm(), kTight);
+}
+
+TEST_F(ScenarioBuildersTest, SetTargetIsNormalized) {
+  TargetConfig config;
+  config.kind = TargetConfig::Kind::kSet;
+  config.normal = Vector3(0.0, 0.0, 2.0);
+  config.offset = 1.0;
+  const Target target = BuildTarget(config);
+  EXPECT_EQ(target.kind(), Target::Kind::kSet);
+  EXPECT_LT((target.normal() - Vector3::UnitZ()).norm(), kTight);
+  EXPECT_NEAR(target.offset(), 0.5, kTight);
+}
+
+TEST_F(ScenarioBuildersTest, BadTargetThrowsLocatedError) {
+  scenario_.target.point = StokesVector(0.0, 0.0, 0.5);
+  EXPECT_THROW(BuildTarget(scenario_.target), ScenarioError);
+  try {
+    BuildTarget(scenario_.target);
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(e.location(), "target.point");
+  }
+}
+
+TEST_F(ScenarioBuildersTest, ControlLawConfigCopiesTheController) {
+  ControllerConfig& c = scenario_.controller;
+  c.method = ControlMethod::kThresholdedGradientProjection;
+  c.step = 0.3;
+  c.nullspace_step = 0.05;
+  c.threshold = 0.8;
+  c.damping = 2e-3;
+  c.singular_value_tolerance = 1e-9;
+  c.dither.amplitude = 0.03;
+  c.dither.reset_threshold = 0.9;
+  const ControlLawConfig config = BuildControlLawConfig(c, scenario_.simulation);
+  EXPECT_EQ(config.method, ControlMethod::kThresholdedGradientProjection);
+  EXPECT_EQ(config.step, 0.3);
+  EXPECT_EQ(config.nullspace_step, 0.05);
+  EXPECT_EQ(config.threshold, 0.8);
+  EXPECT_EQ(config.damping, 2e-3);
+  EXPECT_EQ(config.singular_value_tolerance, 1e-9);
+  EXPECT_EQ(config.dither.amplitude, 0.03);
+  EXPECT_EQ(config.dither.reset_threshold, 0.9);
+}
+
+TEST_F(ScenarioBuildersTest, DitherSettleDefaultsToTheLoopDelay) {
+  ASSERT_EQ(scenario_.controller.dither.settle_samples, 0);
+  EXPECT_EQ(BuildControlLawConfig(scenario_.controller, scenario_.simulation)
+                .dither.settle_samples,
+            50);
+  scenario_.controller.dither.settle_samples = 7;
+  EXPECT_EQ(BuildControlLawConfig(scenario_.controller, scenario_.simulation)
+                .dither.settle_samples,
+            7);
+}
+
+TEST_F(ScenarioBuildersTest, DitherResetSamplesAreRoundedAndAtLeastOne) {
+  scenario_.controller.dither.reset_duration_s = 2e-6;
+  EXPECT_EQ(BuildControlLawConfig(scenario_.controller, scenario_.simulation)
+                .dither.reset_samples,
+            100);
+  scenario_.controller.dither.reset_duration_s = 0.0;
+  EXPECT_EQ(BuildControlLawConfig(scenario_.controller, scenario_.simulation)
+                .dither.reset_samples,
+            1);
+  scenario_.controller.dither.reset_duration_s = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(BuildControlLawConfig(scenario_.controller, scenario_.simulation)
+                .dither.reset_samples,
+            1);
+}
+
+TEST_F(ScenarioBuildersTest, EveryMethodOfAValidScenarioBuildsALaw) {
+  for (ControlMethod method :
+       {ControlMethod::kInverse, ControlMethod::kTranspose, ControlMethod::kDamped,
+        ControlMethod::kPseudoInverse, ControlMethod::kRegularizedLeastSquares,
+        ControlMethod::kGradientProjection, ControlMethod::kThresholdedGradientProjection,
+        ControlMethod::kExtendedJacobian, ControlMethod::kDither}) {
+    SCOPED_TRACE(std::string(MethodName(method)));
+    scenario_.controller.method = method;
+    ASSERT_NO_THROW(ValidateScenario(scenario_));
+    const ControlLawConfig config =
+        BuildControlLawConfig(scenario_.controller, scenario_.simulation);
+    EXPECT_NE(MakeControlLaw(config, ScenarioControlCount(scenario_.stages), true), nullptr);
+  }
+}
+
+TEST_F(ScenarioBuildersTest, InitialPhiIsZeroWhenEmpty) {
+  const ControlVector phi = BuildInitialPhi(scenario_.controller, 3);
+  ASSERT_EQ(phi.size(), 3);
+  EXPECT_EQ(phi.norm(), 0.0);
+}
+
+TEST_F(ScenarioBuildersTest, InitialPhiIsCopied) {
+  scenario_.controller.initial_phi = {0.1, -0.2, 0.3};
+  const ControlVector phi = BuildInitialPhi(scenario_.controller, 3);
+  ASSERT_EQ(phi.size(), 3);
+  EXPECT_EQ(phi[0], 0.1);
+  EXPECT_EQ(phi[1], -0.2);
+  EXPECT_EQ(phi[2], 0.3);
+}
+
+TEST_F(ScenarioBuildersTest, InitialPhiOfTheWrongSizeThrows) {
+  scenario_.controller.initial_phi = {0.1, -0.2};
+  EXPECT_THROW(BuildInitialPhi(scenario_.controller, 3), ScenarioError);
+}
+
+TEST_F(ScenarioBuildersTest, InitialPhiBeyondTheControlCapacityThrows) {
+  EXPECT_THROW(BuildInitialPhi(scenario_.controller, kMaxControls + 1), ScenarioError);
+  EXPECT_THROW(BuildInitialPhi(scenario_.controller, -1), ScenarioError);
+}
+
+}  // namespace
+}  // namespace dpc
