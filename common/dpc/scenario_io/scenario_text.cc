@@ -454,7 +454,7 @@ void SimulationToProto(const SimulationConfig& s, scenario::Simulation* p) {
 // ---------------------------------------------------------------------------------------------
 // Files.
 
-std::string ReadScenarioFile(const std::string& path) {
+std::string ReadScenarioText(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) {
     throw ScenarioError(path, "is a directory; expected a scenario file (.pbtxt)");
@@ -566,9 +566,12 @@ std::string ScenarioToText(const ScenarioConfig& config) {
   return text;
 }
 
+ScenarioConfig ReadScenarioFile(const std::string& path) {
+  return ScenarioFromProto(ParseScenarioText(ReadScenarioText(path), path));
+}
+
 ScenarioConfig LoadScenarioFile(const std::string& path) {
-  const std::string text = ReadScenarioFile(path);
-  ScenarioConfig config = ScenarioFromProto(ParseScenarioText(text, path));
+  ScenarioConfig config = ReadScenarioFile(path);
   ValidateScenario(config);
   return config;
 }

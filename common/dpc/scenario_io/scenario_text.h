@@ -48,6 +48,10 @@ scenario::Scenario ScenarioToProto(const ScenarioConfig& config);
 /// `config` in text format, parseable by ParseScenarioText.
 std::string ScenarioToText(const ScenarioConfig& config);
 
+/// Reads, parses and converts a scenario file without validating it (for callers that apply
+/// overrides first). Throws ScenarioError like LoadScenarioFile, except for field values.
+ScenarioConfig ReadScenarioFile(const std::string& path);
+
 /// Reads, parses, converts and validates a scenario file. Throws ScenarioError located at
 /// `path` if the file cannot be read or exceeds kMaxScenarioTextBytes, at "path:line:column"
 /// for a parse error, and at the field path (see ValidateScenario) for a bad value.
