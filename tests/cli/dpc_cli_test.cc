@@ -1,0 +1,230 @@
+// End-to-end tests of the dpc command: they run the built binary (DPC_BINARY) on the shipped
+// scenarios and on broken ones, and check its output, files and exit codes.
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sys/wait.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int exit_code;
+  std::string out;
+  std::string err;
+};
+
+class DpcCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("dpc_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // Runs `dpc <args>`; stdout and stderr captured through files.
+  Result Run(const std::string& args) {
+    const std::string out = (dir_ / "stdout").string(), err = (dir_ / "stderr").string();
+    const std::string command =
+        std::string(DPC_BINARY) + " " + args + " >" + out + " 2>" + err + " </dev/null";
+    const int status = std::system(command.c_str());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, Slurp(out), Slurp(err)};
+  }
+  static std::string Slurp(const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  }
+  std::string Write(const std::string& name, const std::string& text) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p.string();
+  }
+  static std::string Scenario(const std::string& name) {
+    return std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/" + name + ".pbtxt";
+  }
+  // A valid minimal scenario with `extra` appended (later fields override nothing: text format
+  // rejects repeated singular fields, so tests write whole messages).
+  static std::string Minimal(const std::string& stages, const std::string& rest = "") {
+    return stages + "\ninput { disturbances { paper_scrambler { rate_rad_per_s: 1e4 } } }\n" +
+           "simulation { duration_s: 1e-4 }\ncontroller { activation_s: 0 }\n" + rest;
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(DpcCliTest, ShippedPaperScenariosLockAndKeepPhiBounded) {
+  for (const char* name : {"paper_fig3", "paper_fig4", "paper_fig5"}) {
+    const Result r = Run("sim " + Scenario(name) + " --json");
+    ASSERT_EQ(r.exit_code, 0) << name << "\n" << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["samples"], 500000) << name;
+    ASSERT_FALSE(j["lock_time_s"].is_null()) << name;
+    EXPECT_LT(j["lock_time_s"].get<double>(), 1e-3) << name;
+    EXPECT_LT(j["error_deg"]["mean"].get<double>(), 8.0) << name;
+    for (const char* key : {"phi_min", "phi_max"}) {
+      for (const auto& v : j[key]) EXPECT_LT(std::abs(v.get<double>()), 3.0) << name << " " << key;
+    }
+    for (const char* key : {"error_deg", "extinction_db_mean", "first_lock_time_s", "phi_p1",
+                            "phi_p99", "nullspace_active_fraction", "resets", "samples_per_s"}) {
+      EXPECT_TRUE(j.contains(key)) << key;
+    }
+  }
+}
+
+TEST_F(DpcCliTest, ThresholdedScenarioUsesTheNullSpaceOnlyPartOfTheTime) {
+  const Result r = Run("sim " + Scenario("paper_fig5") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const double fraction = nlohmann::json::parse(r.out)["nullspace_active_fraction"];
+  EXPECT_GT(fraction, 0.0);
+  EXPECT_LT(fraction, 0.9);
+}
+
+TEST_F(DpcCliTest, TraceAndPlotAreWritten) {
+  const std::string png = (dir_ / "fig.png").string(), csv = (dir_ / "fig.csv").string();
+  const Result r = Run("sim " + Scenario("paper_fig3") + " --duration-s 3e-3 --trace " + csv +
+                       " --plot " + png);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("lock"), std::string::npos);
+  std::ifstream in(png, std::ios::binary);
+  std::array<char, 8> signature{};
+  in.read(signature.data(), 8);
+  EXPECT_EQ(std::string(signature.data() + 1, 3), "PNG");
+  const std::string trace = Slurp(csv);
+  EXPECT_EQ(trace.rfind("# dpc-trace", 0), 0u);
+  EXPECT_NE(trace.find("t_s,s_in_1"), std::string::npos);
+  // The plot command redraws it.
+  const Result again = Run("plot " + csv + " -o " + (dir_ / "again.png").string());
+  EXPECT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_TRUE(fs::exists(dir_ / "again.png"));
+}
+
+TEST_F(DpcCliTest, FlagsOverrideTheScenario) {
+  const Result r = Run("sim --stages-axes 3131 --method pinv --rate-rad-per-s 2e4 --duration-s 3e-3 "
+                       "--delay-s 2e-7 --seed 5 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["stages"], "R3 R1 R3 R1");
+  EXPECT_EQ(j["method"], "pinv");
+  EXPECT_EQ(j["rate_rad_per_s"], 2e4);
+  EXPECT_EQ(j["delay_samples"], 10);
+  EXPECT_EQ(j["seed"], 5);
+  EXPECT_EQ(j["samples"], 150000);
+}
+
+TEST_F(DpcCliTest, StaticInputLocksExactly) {
+  const Result r = Run("sim --static --duration-s 3e-3 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_LT(nlohmann::json::parse(r.out)["error_deg"]["p99"].get<double>(), 1e-6);
+}
+
+TEST_F(DpcCliTest, MeasuredLoopAboveItsLimitWarns) {
+  const Result r = Run("sim --loop measured --duration-s 2.1e-3 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("stability limit"), std::string::npos) << r.err;
+}
+
+TEST_F(DpcCliTest, PrintScenarioRoundTrips) {
+  const Result r = Run("sim " + Scenario("paper_fig4") + " --step 0.2 --print-scenario");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string path = Write("printed.pbtxt", r.out);
+  const Result again = Run("sim " + path + " --duration-s 2.5e-3 --json");
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(nlohmann::json::parse(again.out)["step"], 0.2);
+}
+
+struct InvalidCase {
+  const char* name;
+  std::string text;
+  const char* field;  // must appear in the message
+};
+
+TEST_F(DpcCliTest, InvalidScenariosAreRejectedNamingTheField) {
+  std::string seventeen;
+  for (int i = 0; i < 17; ++i) seventeen += "stages { axis: S1 }\n";
+  const std::vector<InvalidCase> cases{
+      {"nan", Minimal("stages { axis: S1 } stages { axis_vector { s1: nan s2: 1 } }"),
+       "stages[1].axis_vector"},
+      {"zero_axis", Minimal("stages { axis: S1 } stages { axis_vector { s1: 0 s2: 0 s3: 0 } }"),
+       "stages[1].axis_vector"},
+      {"unknown_method", "stages { axis: S1 }\ncontroller { method: NEWTON }", "method"},
+      {"negative_rate",
+       "stages { axis: S1 }\ninput { disturbances { paper_scrambler { rate_rad_per_s: -5 } } }",
+       "input.disturbances[0].paper_scrambler.rate_rad_per_s"},
+      {"no_stages", "input { }", "stages"},
+      {"seventeen_stages", seventeen, "stages"},
+      {"table_not_monotonic",
+       Minimal("stages { axis: S1 map { table { control: [0, 1, 2, 3] "
+               "angle_rad: [0, 1, 3, 2] } } }"),
+       "stages[0].map.table.angle_rad[3]"},
+      {"non_unit_target", Minimal("stages { axis: S1 }", "target { point { s1: 0 s2: 0.6 s3: 0.9 } }"),
+       "target.point"},
+      {"syntax", "stages { axis: S1 ", "syntax.pbtxt:1"},
+  };
+  for (const auto& c : cases) {
+    const std::string path = Write(std::string(c.name) + ".pbtxt", c.text);
+    const Result r = Run("sim " + path + " --json");
+    EXPECT_EQ(r.exit_code, 2) << c.name << "\n" << r.out << r.err;
+    EXPECT_NE(r.err.find(c.field), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_TRUE(r.out.empty()) << c.name;
+  }
+}
+
+TEST_F(DpcCliTest, BadFlagsAreRejectedNamingTheFlag) {
+  Result r = Run("sim --method newton");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--method"), std::string::npos) << r.err;
+  r = Run("sim --step -1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("controller.step"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--step"), std::string::npos) << r.err;
+  r = Run("sim --stages-axes 14");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--stages-axes"), std::string::npos) << r.err;
+  r = Run("sim --static --rate-rad-per-s 5");
+  EXPECT_EQ(r.exit_code, 2);
+  r = Run("sim --method damped --stages-axes 3131");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("controller.method"), std::string::npos) << r.err;
+  r = Run("sim /nonexistent.pbtxt");
+  EXPECT_EQ(r.exit_code, 2);
+  r = Run("frobnicate");
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+TEST_F(DpcCliTest, SweepPrintsATableAndJsonLines) {
+  const Result r = Run("sweep --methods gp,pinv --rates 1e3,1e4 --seeds 1,2 --duration-s 1e-3 "
+                       "--activation-s 2e-4 --no-progress --csv " + (dir_ / "s.csv").string() +
+                       " --plot " + (dir_ / "s.png").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  int rows = 0;
+  std::istringstream lines(r.out);
+  for (std::string line; std::getline(lines, line);) rows += line.rfind("scenario", 0) == 0;
+  EXPECT_EQ(rows, 4) << r.out;
+  EXPECT_TRUE(fs::exists(dir_ / "s.png"));
+  EXPECT_NE(Slurp(dir_ / "s.csv").find("error_deg_mean"), std::string::npos);
+  const Result json = Run("sweep --methods gp --rates 1e3,1e4 --duration-s 1e-3 --activation-s "
+                          "2e-4 --json --no-progress");
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  std::istringstream jl(json.out);
+  int objects = 0;
+  for (std::string line; std::getline(jl, line);) {
+    EXPECT_NO_THROW(nlohmann::json::parse(line)) << line;
+    ++objects;
+  }
+  EXPECT_EQ(objects, 2);
+}
+
+}  // namespace
