@@ -10,9 +10,6 @@
 namespace dpc {
 namespace {
 
-// The columns before the control signals, in order.
-constexpr const char* kFixedHeader = "t_s,s_in_1,s_in_2,s_in_3,s_out_1,s_out_2,s_out_3,error_deg";
-
 void RequireValidControlName(const std::string& name) {
   if (name.empty()) {
     throw std::invalid_argument("TraceWriter: a control name is empty");
@@ -45,7 +42,16 @@ TraceWriter::TraceWriter(const std::string& path, std::vector<std::string> contr
     throw std::invalid_argument(fmt::format("TraceWriter: {} control names; at most {}",
                                             control_names_.size(), kMaxControls));
   }
-  for (const std::string& name : control_names_) RequireValidControlName(name);
+  for (size_t i = 0; i < control_names_.size(); ++i) {
+    RequireValidControlName(control_names_[i]);
+    for (size_t j = 0; j < i; ++j) {
+      if (control_names_[j] == control_names_[i]) {
+        throw std::invalid_argument(fmt::format(
+            "TraceWriter: control name '{}' appears twice; CSV column names must be unique",
+            control_names_[i]));
+      }
+    }
+  }
   for (const std::string& line : comment_lines) RequireValidCommentLine(line);
 
   file_ = std::fopen(path_.c_str(), "wb");
@@ -57,7 +63,7 @@ TraceWriter::TraceWriter(const std::string& path, std::vector<std::string> contr
   buffer_.reserve(kBufferBytes);
   auto out = fmt::appender(buffer_);
   for (const std::string& line : comment_lines) out = fmt::format_to(out, "# {}\n", line);
-  out = fmt::format_to(out, "{}", kFixedHeader);
+  out = fmt::format_to(out, "{}", kTraceFixedHeader);
   for (const std::string& name : control_names_) out = fmt::format_to(out, ",{}", name);
   buffer_.push_back('\n');
   // Long comments may have grown the buffer; keep kRowReserveBytes free for Write().

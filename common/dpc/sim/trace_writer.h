@@ -22,11 +22,18 @@
 #include <cstdint>
 #include <cstdio>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "dpc/optics/stokes.h"
 
 namespace dpc {
+
+/// The columns of every trace before the control signals, as written in the header line.
+inline constexpr std::string_view kTraceFixedHeader =
+    "t_s,s_in_1,s_in_2,s_in_3,s_out_1,s_out_2,s_out_3,error_deg";
+/// The number of columns in kTraceFixedHeader; the control signals follow.
+inline constexpr int kTraceFixedColumnCount = 8;
 
 class TraceWriter {
  public:
@@ -38,7 +45,7 @@ class TraceWriter {
 
   /// Opens (truncates) `path` and writes the comment lines and the header into the buffer.
   /// @param control_names  one CSV column name per control signal, at most kMaxControls; each
-  ///        non-empty, without commas, quotes, whitespace or control characters.
+  ///        non-empty, unique, without commas, quotes, whitespace or control characters.
   /// @param comment_lines  free text written as "# <line>"; no line breaks inside a line.
   /// @throws std::invalid_argument for a bad control name or comment line (before the file is
   ///         created); std::runtime_error naming `path` and strerror(errno) if the file cannot

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -64,6 +65,11 @@ TEST_F(TraceWriterTest, WritesCommentsThenHeader) {
   EXPECT_EQ(lines[1], "# seed = 7");
   EXPECT_EQ(lines[2],
             "t_s,s_in_1,s_in_2,s_in_3,s_out_1,s_out_2,s_out_3,error_deg,phi_1,phi_2,phi_3");
+}
+
+TEST(TraceWriterHeaderTest, FixedColumnCountMatchesTheFixedHeader) {
+  const auto commas = std::count(kTraceFixedHeader.begin(), kTraceFixedHeader.end(), ',');
+  EXPECT_EQ(commas + 1, kTraceFixedColumnCount);
 }
 
 TEST_F(TraceWriterTest, NoControlsAndNoComments) {
@@ -144,6 +150,10 @@ TEST_F(TraceWriterTest, RejectsBadControlNames) {
         << "name '" << bad << "'";
   }
   EXPECT_FALSE(std::filesystem::exists(path_)) << "validation happens before the file opens";
+}
+
+TEST_F(TraceWriterTest, RejectsDuplicateControlNames) {
+  EXPECT_THROW(TraceWriter(path_, {"phi_1", "phi_2", "phi_1"}, {}), std::invalid_argument);
 }
 
 TEST_F(TraceWriterTest, RejectsTooManyControlNames) {
