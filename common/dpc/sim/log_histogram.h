@@ -1,0 +1,145 @@
+#pragma once
+// A fixed-size histogram with logarithmic bins for signed values: streaming percentiles over
+// runs of up to ~1e12 samples in O(1) memory (e.g. the pointing error of a long closed-loop run).
+//
+// Bins. A finite double |v| = 2^e · (1 + f), f ∈ [0, 1), is binned by its IEEE-754 bits, as
+// HdrHistogram does: the bin key is the biased exponent followed by the top b = sub_bucket_bits
+// bits of the mantissa,
+//
+//   key(|v|) = bits(|v|) >> (52 − b),
+//
+// so every binary octave [2^e, 2^(e+1)) is split into 2^b bins of equal width 2^(e−b), and the
+// width of a bin relative to any value inside it is at most
+//
+//   w_rel = 2^−b                     (0.39 % for the default b = 8).
+//
+// No log() is evaluated: a key is one shift. Because IEEE-754 orders non-negative doubles like
+// their bit patterns, keys are monotone in |v|. The bins, in increasing value order, are
+//
+//   [negative bins, most negative first] [zero bin] [positive bins, smallest first]
+//
+// with K = key(max_magnitude) − key(min_magnitude) + 1 bins per sign, 2K + 1 in all:
+//   * |v| < min_magnitude (including ±0)        → the zero bin;
+//   * min_magnitude ≤ |v|                      → the bin of key(|v|), the lowest one starting at
+//                                                min_magnitude itself;
+//   * |v| beyond the bin of max_magnitude (±∞) → the outermost bin of its sign (still counted);
+//   * NaN                                       → no bin; counted in nan_count() only.
+// min(), max(), count() and sum() are exact (sum() compensated, see below), independent of bins.
+//
+// Percentile (rank-based; "nearest rank, interpolated inside the bin"). With n = count() and
+// the samples sorted as x_(1) ≤ … ≤ x_(n):
+//   1. percent = 0 → min(), percent = 100 → max(); otherwise
+//   2. the nearest rank k = ⌈percent · n / 100⌉, clamped to [1, n]; the exact nearest-rank
+//      percentile, which the histogram estimates, is x_(k). k = 1 → min(), k = n → max();
+//   3. otherwise, the bin holding rank k: the first bin whose cumulative count reaches k; say it
+//      holds c samples, ranks k0 + 1 … k0 + c, and spans [lo, hi) intersected with
+//      [min(), max()] (the far edge of an outermost bin is ±∞ before the intersection);
+//   4. the c samples are taken as evenly spread over [lo, hi), the j-th (j = k − k0) at the
+//      centre of the j-th of c equal sub-intervals:  estimate = lo + (j − ½)/c · (hi − lo).
+//      The zero bin returns 0 (clamped to [min(), max()]) instead.
+// Accuracy. The estimate and x_(k) both lie in [lo, hi), so for min_magnitude ≤ |x_(k)| ≤
+// max_magnitude:
+//   |estimate − x_(k)| < w_rel · |x_(k)|     always (one bin width, relative),
+//   |estimate − x_(k)| ≤ w_rel · |x_(k)| / 2 when the bin holds a single sample (its centre),
+// and typically well under half a bin when the bins around x_(k) hold several samples of a
+// smooth distribution (the interpolation then tracks it; the tests measure ≤ 0.35 bin widths on
+// 1e5 uniform, log-normal and normal samples). The tests check all three statements. In the zero bin the error is below
+// min_magnitude (absolute). A percentile among samples beyond ±max_magnitude is only known to
+// lie between the outermost bin's near edge and max() (min()); their count is exact.
+//
+// Sum. sum() uses Neumaier's compensated summation (Kahan–Babuška): its error is about
+// ε·|Σx| + n·ε²·Σ|x| (ε = 2^−53) instead of n·ε·Σ|x| for naive summation, so the mean of 1e9
+// samples is exact to ~1e-15 relative unless the samples cancel heavily. Once an infinite
+// sample arrives the sum is ±∞ (NaN for +∞ and −∞ both).
+//
+// Memory: the bins are one std::vector<uint64_t> of 2K + 1 counters allocated once in the
+// constructor (41 k bins, 328 KiB for the defaults); Add, Merge, Clear and Percentile never
+// allocate. Counters are 64-bit: 1e12 samples in one bin are far from overflow.
+// Not thread-safe: give each thread its own histogram and Merge them.
+
+#include <cstdint>
+#include <vector>
+
+namespace dpc {
+
+class LogHistogram {
+ public:
+  /// The most bins (2K + 1) a histogram may have: 2^24 counters, 128 MiB.
+  static constexpr int64_t kMaxBinCount = int64_t{1} << 24;
+  /// The largest sub_bucket_bits accepted.
+  static constexpr int kMaxSubBucketBits = 20;
+
+  /// @param min_magnitude  smallest |v| that gets a logarithmic bin; smaller |v| go to the zero
+  ///                       bin. Finite and ≥ the smallest normal double (2.2e-308).
+  /// @param max_magnitude  largest |v| with a bin of its own; larger |v| go to the outermost
+  ///                       bin. Finite and > min_magnitude.
+  /// @param sub_bucket_bits  b in [1, kMaxSubBucketBits]: 2^b bins per octave, relative bin
+  ///                       width 2^−b.
+  /// @throws std::invalid_argument if an argument is out of range or the histogram would need
+  ///         more than kMaxBinCount bins.
+  explicit LogHistogram(double min_magnitude = 1e-12, double max_magnitude = 1e12,
+                        int sub_bucket_bits = 8);
+
+  /// Adds one sample. Real-time safe: O(1), no allocation, no log(), no exception.
+  void Add(double value) noexcept;
+
+  /// The estimated percentile of the samples added so far (see the header comment for the
+  /// exact definition and accuracy); NaN when there are none. O(number of bins); not for the
+  /// real-time path. @throws std::invalid_argument unless 0 ≤ percent ≤ 100.
+  double Percentile(double percent) const;
+
+  /// Adds the samples of `other` to this histogram (`other` may be *this). Equivalent to having
+  /// added all of them to one histogram, except for the rounding of sum(). No allocation.
+  /// @throws std::invalid_argument unless `other` has the same min_magnitude, max_magnitude and
+  ///         sub_bucket_bits.
+  void Merge(const LogHistogram& other);
+
+  /// Forgets every sample; keeps the geometry and the memory. No allocation.
+  void Clear() noexcept;
+
+  /// The number of non-NaN samples added.
+  int64_t count() const { return static_cast<int64_t>(count_); }
+  /// The number of NaN samples added (not in count(), not binned).
+  int64_t nan_count() const { return static_cast<int64_t>(nan_count_); }
+  /// The smallest / largest sample exactly; NaN when count() == 0.
+  double min() const;
+  double max() const;
+  /// The compensated sum of the samples; 0 when count() == 0.
+  double sum() const;
+  /// sum() / count(); NaN when count() == 0.
+  double mean() const;
+
+  double min_magnitude() const { return min_magnitude_; }
+  double max_magnitude() const { return max_magnitude_; }
+  int sub_bucket_bits() const { return sub_bucket_bits_; }
+  /// The width of a bin relative to any value inside it, at most: 2^−sub_bucket_bits.
+  double relative_bin_width() const;
+  /// The number of bins, 2K + 1 (including the zero bin).
+  int64_t bin_count() const { return static_cast<int64_t>(bins_.size()); }
+
+ private:
+  // The value range [lo, hi) of bin `index` (for the zero bin: [-min_magnitude, min_magnitude));
+  // the far edge of an outermost bin is ±∞ (it also holds everything beyond max_magnitude).
+  void BinEdges(int64_t index, double* lo, double* hi) const;
+  // Neumaier compensated addition of `value` into (sum_, compensation_).
+  void AddToSum(double value) noexcept;
+
+  double min_magnitude_;
+  double max_magnitude_;
+  int sub_bucket_bits_;
+  int mantissa_shift_;      // 52 − b
+  uint64_t min_key_;        // key(min_magnitude)
+  uint64_t max_key_;        // key(max_magnitude)
+  uint64_t min_magnitude_bits_;
+  int64_t zero_index_;      // K
+  std::vector<uint64_t> bins_;
+
+  uint64_t count_ = 0;
+  uint64_t nan_count_ = 0;
+  double min_;
+  double max_;
+  double sum_ = 0.0;
+  double compensation_ = 0.0;
+};
+
+}  // namespace dpc
