@@ -127,6 +127,38 @@ void BM_FullControlStep(benchmark::State& state) {
   }
 }
 
+// The controller's dependent chain as the simulator runs it: each command's pose is derived
+// from the previous one (incremental sines/cosines), then kinematics, task, law, integration.
+void BM_ControlLoop(benchmark::State& state) {
+  const int stages = static_cast<int>(state.range(0));
+  const WaveplateChain chain = WaveplateChain::FromAxes(Axes(stages));
+  ControlLawConfig config;
+  std::unique_ptr<ControlLaw> law = MakeControlLaw(config, stages, true);
+  ControlProblem problem;
+  problem.chain = &chain;
+  problem.target = &kPaperTarget;
+  problem.need_jacobian = law->needs_jacobian();
+  ChainPose poses[2];
+  ControlVector phi = ControlVector::Constant(stages, 0.3);
+  chain.ComputePose(phi, &poses[0]);
+  // A slowly rotating input keeps the loop tracking (the steps stay small, as in the scenario).
+  const Matrix3 turn = RotationAboutAxis(Vector3::UnitZ(), 2e-3);
+  StokesVector s_in = StokesVector(0.3, -0.5, 0.81).normalized();
+  ControlVector delta;
+  int current = 0;
+  for (auto _ : state) {
+    s_in = turn * s_in;
+    problem.pose = &poses[current];
+    problem.s_in = s_in;
+    UpdateControlProblem(&problem);
+    law->ComputeUpdate(problem, &delta);
+    phi += delta;
+    chain.ComputePoseFrom(poses[current], phi, &poses[1 - current]);
+    current = 1 - current;
+  }
+  benchmark::DoNotOptimize(phi.data());
+}
+
 void BM_Kinematics(benchmark::State& state) {
   ProblemPool pool(Axes(static_cast<int>(state.range(0))));
   ChainKinematics k;
@@ -196,6 +228,7 @@ void RegisterAll() {
       ->Args({4, 1});
   benchmark::RegisterBenchmark("ComputePose", BM_ComputePose)->Arg(3)->Arg(4);
   benchmark::RegisterBenchmark("Kinematics", BM_Kinematics)->Arg(3)->Arg(4);
+  benchmark::RegisterBenchmark("ControlLoop/gp", BM_ControlLoop)->Arg(3)->Arg(4);
   benchmark::RegisterBenchmark("ControlStep/gp", BM_FullControlStep)->Args({3, 0})->Args({4, 0});
   benchmark::RegisterBenchmark("ControlStep/gp-svd-baseline", BM_FullControlStep)
       ->Args({3, 1})

@@ -1,4 +1,4 @@
-#include "dpc/paper_figure.h"
+#include "paper_figure.h"
 
 #include <fmt/format.h>
 
@@ -10,9 +10,9 @@
 #include <regex>
 #include <stdexcept>
 
-#include "dpc/gnuplot_runner.h"
+#include "gnuplot_runner.h"
 #include "dpc/sim/trace_writer.h"
-#include "dpc/trace_envelope.h"
+#include "trace_envelope.h"
 
 namespace dpc {
 namespace {

@@ -56,7 +56,7 @@ CLI::App* AddSimCommand(CLI::App& app, SimOptions* o) {
   o->overrides.AddTo(*sim);
   sim->add_option("--trace", o->trace_path, "Stream a CSV trace of the run to this file");
   sim->add_option("--trace-every", o->trace_every,
-                  "Keep every N-th sample in the trace (default: at most ~200k rows)")
+                  "Keep every N-th sample in the trace (default: at most ~50k rows)")
       ->check(CLI::PositiveNumber);
   sim->add_option("--plot", o->plot_path,
                   "Draw the paper-style figure (S_out and each phi_i against time) to this PNG");
@@ -93,7 +93,7 @@ int RunSimCommand(const SimOptions& o) {
     trace_path = std::filesystem::path(o.plot_path).replace_extension(".csv").string();
   }
   const int64_t total = simulator->total_samples();
-  const int64_t every = o.trace_every > 0 ? o.trace_every : std::max<int64_t>(1, total / 200000);
+  const int64_t every = o.trace_every > 0 ? o.trace_every : std::max<int64_t>(1, total / 50000);
 
   try {
     std::unique_ptr<TraceWriter> trace;

@@ -16,7 +16,7 @@ struct SimOptions {
   std::string scenario_path;
   ScenarioOverrides overrides;
   std::string trace_path;
-  int64_t trace_every = 0;  ///< 0: automatic (at most ~200k rows)
+  int64_t trace_every = 0;  ///< 0: automatic (at most ~50k rows)
   std::string plot_path;
   bool json = false;
   bool progress = false;

@@ -1,4 +1,4 @@
-#include "dpc/trace_envelope.h"
+#include "trace_envelope.h"
 
 #include <fmt/format.h>
 

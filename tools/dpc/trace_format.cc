@@ -2,11 +2,11 @@
 
 #include <fmt/format.h>
 
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
 #include "dpc/control/control_law_factory.h"
+#include "trace_envelope.h"
 
 namespace dpc::tools {
 namespace {
@@ -45,19 +45,16 @@ FigureOptions FigureOptionsFor(const ClosedLoopSimulator& simulator) {
 }
 
 std::map<std::string, std::string> ReadTraceMetadata(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(fmt::format("cannot read trace {}", path));
+  const TraceHeader header = ReadTraceHeader(path);
   std::map<std::string, std::string> metadata;
-  std::string line;
   bool magic = false;
-  while (std::getline(in, line) && line.rfind("# ", 0) == 0) {
-    const std::string body = line.substr(2);
-    if (body == kMagic) {
+  for (const std::string& line : header.comment_lines) {
+    if (line == kMagic) {
       magic = true;
       continue;
     }
-    const auto eq = body.find('=');
-    if (eq != std::string::npos) metadata[body.substr(0, eq)] = body.substr(eq + 1);
+    const auto eq = line.find('=');
+    if (eq != std::string::npos) metadata[line.substr(0, eq)] = line.substr(eq + 1);
   }
   if (!magic) {
     throw std::runtime_error(

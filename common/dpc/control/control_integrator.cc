@@ -1,5 +1,7 @@
 #include "dpc/control/control_integrator.h"
 
+#include "dpc/optics/count_dispatch.h"
+
 #include <fmt/format.h>
 
 #include <stdexcept>
@@ -26,11 +28,25 @@ void ControlIntegrator::Reset(const ControlVector& phi) {
 
 ControlIntegrator::Outcome ControlIntegrator::Apply(ControlStatus status,
                                                     const ControlVector& delta_phi) {
-  if (!IsUsable(status) || delta_phi.size() != phi_.size() || !delta_phi.allFinite()) {
+  if (!IsUsable(status) || delta_phi.size() != phi_.size()) {
     ++rejected_;
     return Outcome::kRejected;
   }
-  phi_ += delta_phi;
+  const int n = static_cast<int>(phi_.size());
+  const bool finite = DispatchCount(n, [&](auto fixed) {
+    const int count = FixedOr(fixed, n);
+    const double* delta = delta_phi.data();
+    double probe = 0.0;  // 0·x is 0 for finite x, NaN for NaN and ±Inf
+    for (int i = 0; i < count; ++i) probe += 0.0 * delta[i];
+    if (probe != 0.0) return false;
+    double* phi = phi_.data();
+    for (int i = 0; i < count; ++i) phi[i] += delta[i];
+    return true;
+  });
+  if (!finite) {
+    ++rejected_;
+    return Outcome::kRejected;
+  }
   if (chain_.ClampToRanges(&phi_) > 0) {
     ++clamped_;
     return Outcome::kClamped;

@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "dpc/control/control_problem.h"
+#include "dpc/control/singular_values.h"
 
 namespace dpc {
 
@@ -29,8 +30,8 @@ std::string_view ControlStatusName(ControlStatus status);
 /// Diagnostics of the last update (read by the simulator's statistics and the status topic).
 struct ControlDiagnostics {
   int rank = 0;               ///< numerical rank of the task Jacobian
-  double sigma_max = 0.0;     ///< largest singular value of the task Jacobian
-  double sigma_min = 0.0;     ///< smallest (of the task's d)
+  /// Singular values of the task Jacobian (= those of J), evaluated when read.
+  SingularValues singular_values;
   bool nullspace_active = false;  ///< the null-space term was applied this sample
   bool loop_suspended = false;    ///< the law did not regulate this sample (dither probe/reset)
   int64_t resets = 0;             ///< control resets so far (dithering baseline)
@@ -50,6 +51,10 @@ class ControlLaw {
 
   /// Short name as on the command line ("gp", "pinv", …).
   virtual std::string_view name() const = 0;
+
+  /// Whether ComputeUpdate reads problem.kinematics.jacobian (the full 3 × n J). Laws that work
+  /// on the reduced task only return false, which saves computing J on every sample.
+  virtual bool needs_jacobian() const { return true; }
 
   const ControlDiagnostics& diagnostics() const { return diagnostics_; }
 

@@ -10,12 +10,16 @@
 //   kMeasured  S_out = the output polarimeter's reading, which lags the command by the loop
 //              delay. The Jacobian is still the model's, at the controller's φ.
 //
-// Task reduction (exact, no SVD). Every column of J is ⊥ S_out (J_c = Ω_c × S_out), so with a
-// right-handed tangent basis (e1, e2, S_out):  J = E·T,  E = [e1 e2],  T = Eᵀ J = [e2ᵀΩ; −e1ᵀΩ]
-// (2 × n), and J⁺ = T⁺Eᵀ. For a point target the task is (T, Eᵀ ΔS) of dimension 2, and every
-// law built on J⁺, Jᵀ or Jᵀ(JJᵀ + λI)⁻¹ gives the same Δφ from it as from (J, ΔS), since
-// JᵀΔS = TᵀEᵀΔS and Jᵀ(JJᵀ + λI)⁻¹ = Tᵀ(TTᵀ + λI)⁻¹Eᵀ on the tangent plane.
-// For a set target n·S = c the task is 1-D: a = nᵀJ = (S_out × n)ᵀΩ (1 × n), e = c − n·S_out.
+// Task reduction (exact, no SVD), in the input frame. M is orthogonal, so J and J′ = MᵀJ have
+// the same singular values, J⁺ = J′⁺Mᵀ and I − J⁺J = I − J′⁺J′. Every column of J′ = [Ω′_c × S_in]
+// is ⊥ S_in, so with a right-handed tangent basis (e1, e2, S_in) at the measured input:
+//   J′ = E·T,  E = [e1 e2],  T = EᵀJ′ = [e2ᵀΩ′; −e1ᵀΩ′] (2 × n),  J⁺ΔS = T⁺ EᵀMᵀΔS.
+// For a point target the task is (T, e = Eᵀ(MᵀS* − MᵀS_out)), dimension 2, where MᵀS_out is
+// S_in itself in model mode. Every law built on J⁺, Jᵀ or Jᵀ(JJᵀ + λI)⁻¹ gets the same Δφ from it
+// as from (J, ΔS): JᵀΔS = TᵀEᵀMᵀΔS and Jᵀ(JJᵀ + λI)⁻¹ = Tᵀ(TTᵀ + λI)⁻¹EᵀMᵀ on the tangent plane.
+// Taking the basis at S_in rather than S_out keeps its division off the control loop's critical
+// path (S_in is known before the chain is evaluated).
+// For a set target n·S = c the task is 1-D: a = nᵀJ = (S_in × Mᵀn)ᵀΩ′ (1 × n), e = c − n·S_out.
 
 #include "dpc/control/target.h"
 #include "dpc/optics/waveplate_chain.h"
@@ -25,7 +29,9 @@ namespace dpc {
 enum class LoopMode { kModel, kMeasured };
 
 /// A d × n task Jacobian, d ≤ 3 (2 for a point target in tangent coordinates, 1 for a set).
-using TaskJacobian = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, kMaxControls>;
+/// Row-major: each row is contiguous, which is how the laws read it.
+using TaskJacobian =
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor, 3, kMaxControls>;
 using TaskVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1>;
 
 struct ControlProblem {
@@ -36,13 +42,16 @@ struct ControlProblem {
   StokesVector s_in = StokesVector::UnitX();            ///< measured input SOP
   StokesVector s_out_measured = StokesVector::UnitX();  ///< measured output SOP
   LoopMode loop_mode = LoopMode::kModel;
+  /// Whether kinematics.jacobian (the full 3 × n J) is needed; the reduced task is always
+  /// built. Set from ControlLaw::needs_jacobian().
+  bool need_jacobian = true;
 
   // ---- Derived by UpdateControlProblem.
-  ChainKinematics kinematics;     ///< model S_out, Ω, J at pose->phi and s_in
+  ChainKinematics kinematics;     ///< model S_out, M, Ω′ (Ω and J if need_jacobian)
   StokesVector s_out_for_error;   ///< model or measured S_out, per loop_mode
-  Vector3 tangent_e1, tangent_e2; ///< right-handed tangent basis at the model S_out
+  Vector3 tangent_e1, tangent_e2; ///< right-handed tangent basis at S_in (input frame)
   TaskJacobian task_jacobian;     ///< T (2 × n, point) or nᵀJ (1 × n, set)
-  TaskVector task_error;          ///< Eᵀ(S* − S_out) or c − n·S_out
+  TaskVector task_error;          ///< Eᵀ Mᵀ(S* − S_out) or c − n·S_out
 
   const ControlVector& phi() const { return pose->phi; }
   int control_count() const { return static_cast<int>(pose->phi.size()); }
@@ -54,8 +63,9 @@ struct ControlProblem {
 /// loop mode, and builds the reduced task. The inputs must be set.
 void UpdateControlProblem(ControlProblem* problem);
 
-/// Real-time. The task Jacobian of `target` for kinematics `k` at tangent basis (e1, e2).
-void BuildTaskJacobian(const Target& target, const ChainKinematics& k, const Vector3& e1,
-                       const Vector3& e2, TaskJacobian* task_jacobian);
+/// Real-time. The task Jacobian of `target` for kinematics `k` evaluated at input `s_in`, with
+/// (e1, e2) the tangent basis at s_in (TangentBasis).
+void BuildTaskJacobian(const Target& target, const ChainKinematics& k, const StokesVector& s_in,
+                       const Vector3& e1, const Vector3& e2, TaskJacobian* task_jacobian);
 
 }  // namespace dpc

@@ -36,6 +36,7 @@ class DitheringLaw final : public ControlLaw {
   void Activate(const ControlVector& phi) override;
   ControlStatus ComputeUpdate(const ControlProblem& problem, ControlVector* delta_phi) override;
   std::string_view name() const override { return "dither"; }
+  bool needs_jacobian() const override { return false; }
 
  private:
   enum class Phase { kProbe, kReset };

@@ -30,10 +30,9 @@ ExtendedJacobianLaw::ExtendedJacobianLaw(double step, double nullspace_step,
 void ExtendedJacobianLaw::Constraint(const ControlProblem& problem, const ControlVector& phi,
                                      ControlVector* g) {
   problem.chain->ComputePose(phi, &pose_);
-  problem.chain->Evaluate(pose_, problem.s_in, &kinematics_);
-  Vector3 e1, e2;
-  TangentBasis(kinematics_.s_out, &e1, &e2);
-  BuildTaskJacobian(*problem.target, kinematics_, e1, e2, &task_jacobian_);
+  problem.chain->Evaluate(pose_, problem.s_in, &kinematics_, /*with_jacobian=*/false);
+  BuildTaskJacobian(*problem.target, kinematics_, problem.s_in, problem.tangent_e1,
+                    problem.tangent_e2, &task_jacobian_);
   pseudo_inverse_.Compute(task_jacobian_);
   pseudo_inverse_.NullSpaceProjection(phi, g);
 }
@@ -49,8 +48,7 @@ ControlStatus ExtendedJacobianLaw::ComputeUpdate(const ControlProblem& problem,
   const ControlVector& phi = problem.phi();
   Constraint(problem, phi, &g_);
   diagnostics_.rank = pseudo_inverse_.rank();
-  diagnostics_.sigma_max = pseudo_inverse_.sigma_max();
-  diagnostics_.sigma_min = pseudo_inverse_.sigma_min();
+  diagnostics_.singular_values = pseudo_inverse_.singular_values();
   diagnostics_.nullspace_active = nullspace_step_ > 0.0;
   if (pseudo_inverse_.rank() < d) return ControlStatus::kSingular;
   if (n <= d) {

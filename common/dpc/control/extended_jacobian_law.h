@@ -35,6 +35,7 @@ class ExtendedJacobianLaw final : public ControlLaw {
 
   ControlStatus ComputeUpdate(const ControlProblem& problem, ControlVector* delta_phi) override;
   std::string_view name() const override { return "extended"; }
+  bool needs_jacobian() const override { return false; }
 
  private:
   using SquareMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxControls,

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -31,21 +32,23 @@ ControlStatus GradientProjectionLaw::ComputeUpdate(const ControlProblem& problem
                                                    ControlVector* delta_phi) {
   pseudo_inverse_.Compute(problem.task_jacobian);
   diagnostics_.rank = pseudo_inverse_.rank();
-  diagnostics_.sigma_max = pseudo_inverse_.sigma_max();
-  diagnostics_.sigma_min = pseudo_inverse_.sigma_min();
-
-  pseudo_inverse_.Solve(problem.task_error, delta_phi);
-  *delta_phi *= step_;
+  diagnostics_.singular_values = pseudo_inverse_.singular_values();
 
   const ControlVector& phi = problem.phi();
-  const bool active = nullspace_step_ > 0.0 &&
-                      (!threshold_ || phi.cwiseAbs().maxCoeff() > *threshold_);
-  diagnostics_.nullspace_active = active;
-  if (active) {
-    pseudo_inverse_.NullSpaceProjection(phi, &nullspace_term_);
-    delta_phi->noalias() -= nullspace_step_ * nullspace_term_;
+  const int n = static_cast<int>(phi.size());
+  bool active = nullspace_step_ > 0.0;
+  if (active && threshold_) {
+    double largest = 0.0;
+    for (int i = 0; i < n; ++i) largest = std::max(largest, std::abs(phi[i]));
+    active = largest > *threshold_;
   }
-  if (!delta_phi->allFinite()) {
+  diagnostics_.nullspace_active = active;
+  pseudo_inverse_.GradientProjectionStep(problem.task_error, phi, step_,
+                                         active ? nullspace_step_ : 0.0, delta_phi);
+  // 0·x is 0 for finite x and NaN for NaN or ±Inf: one branch for the whole vector.
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i) sum += 0.0 * (*delta_phi)[i];
+  if (sum != 0.0) {
     delta_phi->setZero();
     return ControlStatus::kNotFinite;
   }

@@ -31,13 +31,13 @@ class GradientProjectionLaw final : public ControlLaw {
 
   ControlStatus ComputeUpdate(const ControlProblem& problem, ControlVector* delta_phi) override;
   std::string_view name() const override { return threshold_ ? "gpt" : "gp"; }
+  bool needs_jacobian() const override { return false; }
 
  private:
   double step_;
   double nullspace_step_;
   std::optional<double> threshold_;
   TaskPseudoInverse pseudo_inverse_;
-  ControlVector nullspace_term_;
 };
 
 }  // namespace dpc

@@ -31,7 +31,7 @@ bool SolveSquareTask(const ControlProblem& problem, double damping, double toler
   }
   if (n != 1) return false;
   const double a = problem.task_jacobian(0, 0) + damping;
-  const double scale = problem.kinematics.generators.col(0).norm() + damping;
+  const double scale = problem.kinematics.input_generators.col(0).norm() + damping;
   if (!(std::abs(a) > tolerance * scale)) return false;
   x->resize(1);
   (*x)[0] = problem.task_error[0] / a;
@@ -49,8 +49,7 @@ JacobianLawBase::JacobianLawBase(double step, double singular_value_tolerance)
 void JacobianLawBase::FactorizeTask(const ControlProblem& problem) {
   pseudo_inverse_.Compute(problem.task_jacobian);
   diagnostics_.rank = pseudo_inverse_.rank();
-  diagnostics_.sigma_max = pseudo_inverse_.sigma_max();
-  diagnostics_.sigma_min = pseudo_inverse_.sigma_min();
+  diagnostics_.singular_values = pseudo_inverse_.singular_values();
 }
 
 ControlStatus JacobianLawBase::Finish(ControlStatus status, ControlVector* delta_phi) {

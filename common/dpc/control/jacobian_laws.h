@@ -51,6 +51,7 @@ class TransposeJacobianLaw final : public JacobianLawBase {
   explicit TransposeJacobianLaw(double step);
   ControlStatus ComputeUpdate(const ControlProblem& problem, ControlVector* delta_phi) override;
   std::string_view name() const override { return "transpose"; }
+  bool needs_jacobian() const override { return false; }
 };
 
 class DampedJacobianLaw final : public JacobianLawBase {
@@ -70,6 +71,7 @@ class PseudoInverseLaw final : public JacobianLawBase {
   explicit PseudoInverseLaw(double step, double singular_value_tolerance = 1e-12);
   ControlStatus ComputeUpdate(const ControlProblem& problem, ControlVector* delta_phi) override;
   std::string_view name() const override { return "pinv"; }
+  bool needs_jacobian() const override { return false; }
 };
 
 class RegularizedLeastSquaresLaw final : public JacobianLawBase {
@@ -78,6 +80,7 @@ class RegularizedLeastSquaresLaw final : public JacobianLawBase {
   RegularizedLeastSquaresLaw(double step, double damping);
   ControlStatus ComputeUpdate(const ControlProblem& problem, ControlVector* delta_phi) override;
   std::string_view name() const override { return "rls"; }
+  bool needs_jacobian() const override { return false; }
 
  private:
   double damping_;

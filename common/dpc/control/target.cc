@@ -51,10 +51,29 @@ double Target::DistanceRad(const StokesVector& s) const {
 }
 
 double Target::LeakFraction(const StokesVector& s) const {
-  if (kind_ == Kind::kPoint) return PolarizerLeak(s, point_);
-  const double half = 0.5 * DistanceRad(s);
-  const double sine = std::sin(half);
-  return sine * sine;
+  double distance, leak;
+  DistanceAndLeak(s, &distance, &leak);
+  return leak;
+}
+
+void Target::DistanceAndLeak(const StokesVector& s, double* distance_rad, double* leak) const {
+  if (kind_ == Kind::kPoint) {
+    const double dx = s[0] - point_[0], dy = s[1] - point_[1], dz = s[2] - point_[2];
+    const double chord_squared = dx * dx + dy * dy + dz * dz;  // (2 sin(α/2))²
+    if (chord_squared <= 2.0) {
+      *leak = 0.25 * chord_squared;
+      *distance_rad = 2.0 * std::asin(std::min(1.0, 0.5 * std::sqrt(chord_squared)));
+    } else {
+      const double ux = s[0] + point_[0], uy = s[1] + point_[1], uz = s[2] + point_[2];
+      const double supplementary_squared = ux * ux + uy * uy + uz * uz;  // (2 cos(α/2))²
+      *leak = 1.0 - 0.25 * supplementary_squared;
+      *distance_rad = M_PI - 2.0 * std::asin(std::min(1.0, 0.5 * std::sqrt(supplementary_squared)));
+    }
+    return;
+  }
+  *distance_rad = DistanceRad(s);
+  const double sine = std::sin(0.5 * *distance_rad);
+  *leak = sine * sine;
 }
 
 std::string Target::Describe() const {

@@ -36,6 +36,10 @@ class Target {
   double DistanceRad(const StokesVector& s) const;
   /// Power fraction through a polarizer aligned with the nearest target point: sin²(α/2).
   double LeakFraction(const StokesVector& s) const;
+  /// Both at once (real-time). For a point target from the chord c = |S − S*| = 2 sin(α/2):
+  /// leak = c²/4 and α = 2 asin(c/2), exact to round-off even for tiny errors (where
+  /// (1 − S·S*)/2 cancels); beyond 90° from the supplementary chord |S + S*|.
+  void DistanceAndLeak(const StokesVector& s, double* distance_rad, double* leak) const;
 
   /// "point [0, 0.6, 0.8]" or "set [0, 0, 1]·S = 0".
   std::string Describe() const;

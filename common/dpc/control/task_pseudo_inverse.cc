@@ -1,29 +1,71 @@
 #include "dpc/control/task_pseudo_inverse.h"
 
+#include "dpc/optics/count_dispatch.h"
+
 #include <cassert>
 #include <cmath>
-#include <utility>
 
 namespace dpc {
+namespace {
+
+inline double Dot(const double* x, const double* y, int n) {
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i) sum += x[i] * y[i];
+  return sum;
+}
+
+}  // namespace
 
 void TaskPseudoInverse::Compute(const TaskJacobian& a) {
   assert(a.rows() == 1 || a.rows() == 2);
   rows_ = static_cast<int>(a.rows());
-  inverse_sigma_squared_[0] = inverse_sigma_squared_[1] = 0.0;
-  if (rows_ == 1) {
-    b_[0] = a.row(0).transpose();
-    const double g = b_[0].squaredNorm();
-    sigma_[0] = std::sqrt(g);
-    sigma_[1] = 0.0;
-    u_.setIdentity();
-    rank_ = g > 0.0 ? 1 : 0;
-    if (rank_) inverse_sigma_squared_[0] = 1.0 / g;
-    return;
-  }
-  const double g11 = a.row(0).squaredNorm();
-  const double g22 = a.row(1).squaredNorm();
-  const double g12 = a.row(0).dot(a.row(1));
-  // Jacobi rotation zeroing the off-diagonal of G (Golub & Van Loan, sym. Schur 2 × 2).
+  n_ = static_cast<int>(a.cols());
+  const double* r0 = a.data();  // row-major: rows are contiguous
+  solve_[0][0] = solve_[0][1] = solve_[1][0] = solve_[1][1] = 0.0;
+  project_[0][0] = project_[0][1] = project_[1][0] = project_[1][1] = 0.0;
+  DispatchCount(n_, [&](auto fixed) {
+    const int n = FixedOr(fixed, n_);
+    if (rows_ == 1) {
+      double g = 0.0;
+      for (int i = 0; i < n; ++i) {
+        b_[0][i] = r0[i];
+        g += r0[i] * r0[i];
+      }
+      singular_values_ = SingularValues::FromGram(g);
+      rank_ = g > 0.0 ? 1 : 0;
+      if (rank_) solve_[0][0] = project_[0][0] = 1.0 / g;
+      return;
+    }
+    const double* r1 = r0 + n_;
+    double g11 = 0.0, g22 = 0.0, g12 = 0.0;
+    for (int i = 0; i < n; ++i) {
+      g11 += r0[i] * r0[i];
+      g22 += r1[i] * r1[i];
+      g12 += r0[i] * r1[i];
+    }
+    const double trace = g11 + g22;
+    const double det = g11 * g22 - g12 * g12;
+    if (!(det > kWellConditioned * trace * trace)) {
+      ComputeJacobi(r0, r1, g11, g22, g12);
+      return;
+    }
+    rank_ = 2;
+    for (int i = 0; i < n; ++i) {
+      b_[0][i] = r0[i];
+      b_[1][i] = r1[i];
+    }
+    const double inverse_det = 1.0 / det;
+    solve_[0][0] = project_[0][0] = g22 * inverse_det;
+    solve_[1][1] = project_[1][1] = g11 * inverse_det;
+    solve_[0][1] = solve_[1][0] = project_[0][1] = project_[1][0] = -g12 * inverse_det;
+    singular_values_ = SingularValues::FromGram(g11, g22, g12, det);
+  });
+}
+
+void TaskPseudoInverse::ComputeJacobi(const double* r0, const double* r1, double g11,
+                                      double g22, double g12) {
+  const int n = n_;
+  // Jacobi rotation zeroing the off-diagonal of G (Golub & Van Loan, 2 × 2 symmetric Schur).
   double c = 1.0, s = 0.0;
   if (g12 != 0.0) {
     const double tau = (g22 - g11) / (2.0 * g12);
@@ -31,52 +73,94 @@ void TaskPseudoInverse::Compute(const TaskJacobian& a) {
     c = 1.0 / std::sqrt(1.0 + t * t);
     s = c * t;
   }
-  u_ << c, s, -s, c;  // u1 = (c, −s), u2 = (s, c)
-  b_[0].noalias() = c * a.row(0).transpose() - s * a.row(1).transpose();
-  b_[1].noalias() = s * a.row(0).transpose() + c * a.row(1).transpose();
-  double n0 = b_[0].squaredNorm(), n1 = b_[1].squaredNorm();
-  if (n1 > n0) {
-    std::swap(b_[0], b_[1]);
-    std::swap(n0, n1);
-    u_.col(0).swap(u_.col(1));
+  // Rotated rows b1 = c·r0 − s·r1, b2 = s·r0 + c·r1, the larger first.
+  const double n1 = c * c * g11 - 2.0 * c * s * g12 + s * s * g22;
+  const double n2 = s * s * g11 + 2.0 * c * s * g12 + c * c * g22;
+  const double u_a[2] = {c, -s}, u_b[2] = {s, c};
+  const double* u0 = n2 > n1 ? u_b : u_a;
+  const double* u1 = n2 > n1 ? u_a : u_b;
+  for (int i = 0; i < n; ++i) {
+    b_[0][i] = u0[0] * r0[i] + u0[1] * r1[i];
+    b_[1][i] = u1[0] * r0[i] + u1[1] * r1[i];
   }
-  sigma_[0] = std::sqrt(n0);
-  if (!(n0 > 0.0)) {
-    sigma_[1] = 0.0;
+  const double norm0 = Dot(b_[0], b_[0], n);
+  if (!(norm0 > 0.0)) {
+    singular_values_ = SingularValues::Exact(0.0, 0.0);
     rank_ = 0;
     return;
   }
   // Re-orthogonalize b2 against b1 (removes the round-off of the rotation).
-  b_[1] -= (b_[0].dot(b_[1]) / n0) * b_[0];
-  n1 = b_[1].squaredNorm();
-  sigma_[1] = std::sqrt(n1);
-  inverse_sigma_squared_[0] = 1.0 / n0;
-  if (sigma_[1] > relative_tolerance_ * sigma_[0]) {
-    rank_ = 2;
-    inverse_sigma_squared_[1] = 1.0 / n1;
-  } else {
-    rank_ = 1;
-  }
+  const double projection = Dot(b_[0], b_[1], n) / norm0;
+  for (int i = 0; i < n; ++i) b_[1][i] -= projection * b_[0][i];
+  const double norm1 = Dot(b_[1], b_[1], n);
+  const double sigma0 = std::sqrt(norm0), sigma1 = std::sqrt(norm1);
+  singular_values_ = SingularValues::Exact(sigma0, sigma1);
+  const double inverse0 = 1.0 / norm0;
+  const bool full_rank = sigma1 > relative_tolerance_ * sigma0;
+  const double inverse1 = full_rank ? 1.0 / norm1 : 0.0;
+  rank_ = full_rank ? 2 : 1;
+  solve_[0][0] = inverse0 * u0[0];
+  solve_[0][1] = inverse0 * u0[1];
+  solve_[1][0] = inverse1 * u1[0];
+  solve_[1][1] = inverse1 * u1[1];
+  project_[0][0] = inverse0;
+  project_[1][1] = inverse1;
 }
 
 void TaskPseudoInverse::Solve(const TaskVector& e, ControlVector* x) const {
+  const int n = n_;
+  x->resize(n);
+  double* out = x->data();
   if (rows_ == 1) {
-    x->noalias() = b_[0] * (e[0] * inverse_sigma_squared_[0]);
+    const double y0 = solve_[0][0] * e[0];
+    for (int i = 0; i < n; ++i) out[i] = b_[0][i] * y0;
     return;
   }
-  const double y0 = (u_(0, 0) * e[0] + u_(1, 0) * e[1]) * inverse_sigma_squared_[0];
-  const double y1 = (u_(0, 1) * e[0] + u_(1, 1) * e[1]) * inverse_sigma_squared_[1];
-  x->noalias() = b_[0] * y0 + b_[1] * y1;
+  const double y0 = solve_[0][0] * e[0] + solve_[0][1] * e[1];
+  const double y1 = solve_[1][0] * e[0] + solve_[1][1] * e[1];
+  for (int i = 0; i < n; ++i) out[i] = b_[0][i] * y0 + b_[1][i] * y1;
 }
 
 void TaskPseudoInverse::NullSpaceProjection(const ControlVector& v, ControlVector* out) const {
-  const double y0 = b_[0].dot(v) * inverse_sigma_squared_[0];
+  const int n = n_;
+  const double* in = v.data();
+  out->resize(n);
+  double* result = out->data();
   if (rows_ == 1) {
-    out->noalias() = v - b_[0] * y0;
+    const double y0 = project_[0][0] * Dot(b_[0], in, n);
+    for (int i = 0; i < n; ++i) result[i] = in[i] - b_[0][i] * y0;
     return;
   }
-  const double y1 = b_[1].dot(v) * inverse_sigma_squared_[1];
-  out->noalias() = v - b_[0] * y0 - b_[1] * y1;
+  const double z0 = Dot(b_[0], in, n), z1 = Dot(b_[1], in, n);
+  const double y0 = project_[0][0] * z0 + project_[0][1] * z1;
+  const double y1 = project_[1][0] * z0 + project_[1][1] * z1;
+  for (int i = 0; i < n; ++i) result[i] = in[i] - b_[0][i] * y0 - b_[1][i] * y1;
+}
+
+void TaskPseudoInverse::GradientProjectionStep(const TaskVector& e, const ControlVector& phi,
+                                               double step, double nullspace_step,
+                                               ControlVector* out) const {
+  out->resize(n_);
+  DispatchCount(n_, [&](auto fixed) {
+    const int n = FixedOr(fixed, n_);
+    const double* v = phi.data();
+    double* result = out->data();
+    const double* b0 = b_[0];
+    const double* b1 = b_[1];
+    double z0 = 0.0, z1 = 0.0;
+    for (int i = 0; i < n; ++i) {
+      z0 += b0[i] * v[i];
+      z1 += b1[i] * v[i];
+    }
+    const double e0 = e[0], e1 = rows_ == 2 ? e[1] : 0.0;
+    if (rows_ == 1) z1 = 0.0;
+    const double y0 = step * (solve_[0][0] * e0 + solve_[0][1] * e1) +
+                      nullspace_step * (project_[0][0] * z0 + project_[0][1] * z1);
+    const double y1 = rows_ == 2 ? step * (solve_[1][0] * e0 + solve_[1][1] * e1) +
+                                       nullspace_step * (project_[1][0] * z0 + project_[1][1] * z1)
+                                 : 0.0;
+    for (int i = 0; i < n; ++i) result[i] = b0[i] * y0 + b1[i] * y1 - nullspace_step * v[i];
+  });
 }
 
 }  // namespace dpc

@@ -2,22 +2,27 @@
 // The Moore–Penrose pseudo-inverse of a reduced task Jacobian A (d × n, d = 1 or 2) in closed
 // form: no iterative SVD on the real-time path.
 //
-// d = 2, one-sided Jacobi: a single plane rotation U = [u1 u2] of the two rows makes them
-// orthogonal, b_i = u_iᵀ A (the rotation diagonalizes G = AAᵀ: tan 2ϑ = 2 g12 / (g22 − g11)).
-// That is the exact SVD A = Σ σ_i u_i v_iᵀ with σ_i = |b_i|, v_i = b_i / σ_i. Then
+// Both results are written through the rows b_i of a matrix B and a 2 × 2 matrix:
 //
-//   A⁺ e        = Σ_i b_i (u_iᵀ e) / σ_i²
-//   (I − A⁺A) v = v − Σ_i b_i (b_iᵀ v) / σ_i²        (projection onto null A, paper eq. 12)
+//   A⁺ e        = Bᵀ (S e)
+//   (I − A⁺A) v = v − Bᵀ (P (B v))              (projection onto null A, paper eq. 12)
 //
-// over the singular values above relative_tolerance·σ1 (rank 2, 1 or 0). Working on the rows
-// rather than inverting AAᵀ keeps the accuracy of an SVD near singularities (AAᵀ would square
-// the condition number). b2 is re-orthogonalized against b1 so the projector stays idempotent.
-// d = 1: A⁺ = Aᵀ / |A|², or 0 when A = 0.
+// d = 2, well conditioned (det G > 1e-6·(tr G)², i.e. σ2/σ1 ≳ 1e-3, G = AAᵀ): the normal
+// equations, B = A and S = P = G⁻¹ (one division). With κ(G) < 1e6 the result is within ~1e-10
+// of the SVD's.
+// d = 2, near a singularity: one-sided Jacobi. A single plane rotation U = [u1 u2] of the two
+// rows makes them orthogonal, b_i = u_iᵀ A (tan 2ϑ = 2 g12 / (g22 − g11)): the exact SVD
+// A = Σ σ_i u_i v_iᵀ with σ_i = |b_i|. Then S = diag(1/σ_i²) Uᵀ and P = diag(1/σ_i²), over the
+// singular values above relative_tolerance·σ1 (rank 2, 1 or 0). Working on the rows keeps the
+// accuracy of an SVD where inverting G would square the condition number. b2 is
+// re-orthogonalized against b1 so the projector stays idempotent.
+// d = 1: B = A, S = P = 1/|A|² (or 0 when A = 0).
 //
 // The singular values of the reduced task equal those of the full 3 × n Jacobian (A = EᵀJ with
-// E orthonormal and J's columns in E's span). About 20n flops and 3 square roots; no allocation.
+// E orthonormal and J's columns in E's span). No allocation.
 
 #include "dpc/control/control_problem.h"
+#include "dpc/control/singular_values.h"
 
 namespace dpc {
 
@@ -31,23 +36,35 @@ class TaskPseudoInverse {
   void Compute(const TaskJacobian& a);
 
   int rank() const { return rank_; }
-  double sigma_max() const { return sigma_[0]; }
-  /// The smallest of the d singular values (σ2 for d = 2, σ1 for d = 1).
-  double sigma_min() const { return sigma_[rows_ - 1]; }
+  /// The singular values (evaluated when read); σ_min is the smallest of the d.
+  const SingularValues& singular_values() const { return singular_values_; }
+  double sigma_max() const { return singular_values_.max(); }
+  double sigma_min() const { return singular_values_.min(); }
 
   /// Real-time. x = A⁺ e.
   void Solve(const TaskVector& e, ControlVector* x) const;
   /// Real-time. out = (I − A⁺A) v.
   void NullSpaceProjection(const ControlVector& v, ControlVector* out) const;
 
+  /// Real-time. out = step·A⁺e − nullspace_step·(I − A⁺A)φ (paper eq. 12) in one pass:
+  /// out = Bᵀ(step·S e + nullspace_step·P B φ) − nullspace_step·φ.
+  void GradientProjectionStep(const TaskVector& e, const ControlVector& phi, double step,
+                              double nullspace_step, ControlVector* out) const;
+
  private:
+  /// det G above this fraction of (tr G)² takes the normal-equation path.
+  static constexpr double kWellConditioned = 1e-6;
+
+  void ComputeJacobi(const double* r0, const double* r1, double g11, double g22, double g12);
+
   double relative_tolerance_;
   int rows_ = 1;
   int rank_ = 0;
-  double sigma_[2] = {0.0, 0.0};
-  double inverse_sigma_squared_[2] = {0.0, 0.0};  ///< 0 for dropped singular values
-  Eigen::Matrix2d u_ = Eigen::Matrix2d::Identity();  ///< columns u1, u2
-  ControlVector b_[2];                               ///< σ_i v_i
+  int n_ = 0;
+  SingularValues singular_values_;
+  double solve_[2][2] = {};    ///< S
+  double project_[2][2] = {};  ///< P
+  double b_[2][kMaxControls] = {};
 };
 
 }  // namespace dpc

@@ -1,5 +1,7 @@
 #include "dpc/disturbance/paper_scrambler.h"
 
+#include <cmath>
+
 #include <fmt/format.h>
 
 namespace dpc {
@@ -15,7 +17,12 @@ PaperScrambler::PaperScrambler(double rate_rad_per_s, double kick_rms_ratio,
   RequireNonNegativeFinite(rate_rad_per_s, "paper scrambler: rate_rad_per_s");
   RequireNonNegativeFinite(kick_rms_ratio, "paper scrambler: kick_rms_ratio");
   kick_sigma_rad_ = kick_rms_ratio * rate_rad_per_s * sample_period_s_;
-  step_rotation_ = RotationAboutAxis(rotation_axis_, rate_rad_per_s * sample_period_s_);
+  const double step_rad = rate_rad_per_s * sample_period_s_;
+  step_rotation_ = RotationAboutAxis(rotation_axis_, step_rad);
+  step_cos_ = std::cos(step_rad);
+  step_sin_ = std::sin(step_rad);
+  rotation_elemental_ = ClassifyAxis(rotation_axis_);
+  kick_elemental_ = ClassifyAxis(kick_axis_);
 }
 
 std::string PaperScrambler::Describe() const {

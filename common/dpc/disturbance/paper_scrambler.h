@@ -44,13 +44,24 @@ class PaperScrambler final : public Disturbance {
   /// Real-time. S ← Rot(k, δ)·Rot(r, ω·dt)·S; one normal draw when σ > 0, none otherwise.
   void Advance(double t_s, StokesVector* sop, RandomSource& random) override {
     (void)t_s;
-    StokesVector rotated = step_rotation_ * (*sop);
+    double x = (*sop)[0], y = (*sop)[1], z = (*sop)[2];
+    if (rotation_elemental_ != ElementalAxis::kGeneral) {  // the paper's S3: a plane rotation
+      RotateElemental(rotation_elemental_, step_cos_, step_sin_, x, y, z);
+    } else {
+      const Vector3 r = step_rotation_ * Vector3(x, y, z);
+      x = r[0], y = r[1], z = r[2];
+    }
     if (kick_sigma_rad_ > 0.0) {
       double sin_kick, cos_kick;
       SinCos(kick_sigma_rad_ * random.Normal(), &sin_kick, &cos_kick);
-      rotated = RotateVector(kick_axis_, cos_kick, sin_kick, rotated);
+      if (kick_elemental_ != ElementalAxis::kGeneral) {  // the paper's S2
+        RotateElemental(kick_elemental_, cos_kick, sin_kick, x, y, z);
+      } else {
+        const Vector3 r = RotateVector(kick_axis_, cos_kick, sin_kick, Vector3(x, y, z));
+        x = r[0], y = r[1], z = r[2];
+      }
     }
-    *sop = rotated;
+    *sop = StokesVector(x, y, z);
   }
 
   std::string Describe() const override;
@@ -69,6 +80,9 @@ class PaperScrambler final : public Disturbance {
   double sample_period_s_;
   double kick_sigma_rad_;
   Matrix3 step_rotation_;  ///< Rot(r, ω·dt)
+  double step_cos_ = 1.0, step_sin_ = 0.0;
+  ElementalAxis rotation_elemental_ = ElementalAxis::kGeneral;
+  ElementalAxis kick_elemental_ = ElementalAxis::kGeneral;
 };
 
 }  // namespace dpc

@@ -43,14 +43,35 @@ inline Vector3 RotateVector(const Vector3& axis, double c, double s, const Vecto
   return c * v + s * axis.cross(v) + ((1.0 - c) * axis.dot(v)) * axis;
 }
 
-/// sin and cos of an angle; for |x| < 2^-7 a Taylor series accurate to about 1 ulp, several
-/// times faster than the library call and is what small per-sample steps hit.
+/// Rotates (x, y, z) by the angle with cosine `c` and sine `s` about an elemental axis (the
+/// other two components turn in their plane; ~6 flops). Does nothing for kGeneral.
+inline void RotateElemental(ElementalAxis axis, double c, double s, double& x, double& y,
+                            double& z) {
+  double t;
+  switch (axis) {
+    case ElementalAxis::kS1: t = y; y = c * t - s * z; z = s * t + c * z; return;
+    case ElementalAxis::kS2: t = z; z = c * t - s * x; x = s * t + c * x; return;
+    case ElementalAxis::kS3: t = x; x = c * t - s * y; y = s * t + c * y; return;
+    case ElementalAxis::kGeneral: return;
+  }
+}
+
+/// The bound below which SmallAngleSinCos is exact to about 1 ulp: 2^-7 rad.
+inline constexpr double kSmallAngleLimit = 0.0078125;
+
+/// sin and cos of |x| < kSmallAngleLimit by their Taylor series (no branch, ~12 flops).
+/// Truncation: x^9/9! < 1e-24 ≈ 1e-22·|x| and x^8/8! < 4e-22 for |x| < 2^-7, far below 1 ulp.
+inline void SmallAngleSinCos(double x, double* s, double* c) {
+  const double x2 = x * x;
+  *s = x * (1.0 + x2 * (-1.0 / 6 + x2 * (1.0 / 120 + x2 * (-1.0 / 5040))));
+  *c = 1.0 + x2 * (-0.5 + x2 * (1.0 / 24 + x2 * (-1.0 / 720)));
+}
+
+/// sin and cos of an angle; the series for |x| < 2^-7 (what small per-sample steps hit),
+/// several times faster than the library call.
 inline void SinCos(double x, double* s, double* c) {
-  if (x > -0.0078125 && x < 0.0078125) {
-    const double x2 = x * x;
-    // Truncation: x^11/11! < 1e-30 and x^10/10! < 1e-27 for |x| < 2^-7.
-    *s = x * (1.0 + x2 * (-1.0 / 6 + x2 * (1.0 / 120 + x2 * (-1.0 / 5040 + x2 / 362880))));
-    *c = 1.0 + x2 * (-0.5 + x2 * (1.0 / 24 + x2 * (-1.0 / 720 + x2 * (1.0 / 40320))));
+  if (x > -kSmallAngleLimit && x < kSmallAngleLimit) {
+    SmallAngleSinCos(x, s, c);
     return;
   }
   *s = std::sin(x);  // GCC merges the pair into one sincos call

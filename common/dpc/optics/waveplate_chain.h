@@ -15,14 +15,19 @@
 //
 // Ω (3 × n) are the stages' axes carried to the output frame, scaled by dθ/dφ ("generators").
 // Every column of J is ⊥ S_out, so rank J ≤ 2 whatever m is. For the paper's 3-stage chain
-// this is exactly J = [M3M2(r1×S'), M3(r2×S''), r3×S'''].
+// this is exactly J = [M3M2(r1×S′), M3(r2×S″), r3×S‴].
 //
-// One backward pass over the elements yields A_e r_e for every e and the full Mueller matrix,
-// hence S_out, Ω and J together (Evaluate). Elemental axes (S1, S2, S3) take a fast path that
-// updates two columns of A instead of a 3 × 3 product.
+// The same in the input frame: with M = M_last ⋯ M_1 and B_e = M_e ⋯ M_1,
 //
-// Real-time use: compute a ChainPose once per command (ComputePose: one sin/cos per element),
-// then Output / Evaluate with it. None of these allocate.
+//   Mᵀ J_c = Ω′_c × S_in,   Ω′_c = Mᵀ Ω_c = Σ_e σ_e (dθ_c/dφ_c) B_(e−1)ᵀ r_e
+//
+// (B_eᵀ r_e = B_(e−1)ᵀ r_e because M_e turns about r_e). Evaluate computes M and Ω′ in one
+// forward pass over the elements; Ω = M Ω′ and J only when asked for. For an elemental axis,
+// B_(e−1)ᵀ r_e is a row of B_(e−1), and M_e B_(e−1) mixes two of its rows.
+//
+// Real-time use: compute a ChainPose once per command (ComputePose, or ComputePoseFrom for
+// small steps from the previous command), then Output / Evaluate with it. None of these
+// allocate.
 
 #include <array>
 #include <vector>
@@ -43,13 +48,18 @@ struct ChainPose {
   std::array<double, kMaxElements> angle_rad{};
   std::array<double, kMaxElements> cos{};
   std::array<double, kMaxElements> sin{};
+  /// Updates by angle addition since the sines and cosines were last evaluated exactly.
+  int incremental_steps = 0;
 };
 
-/// S_out, the generators Ω and the Jacobian J at one pose and input.
+/// S_out and the generators at one pose and input; the output-frame generators Ω and the
+/// Jacobian J only when Evaluate is asked for them.
 struct ChainKinematics {
   StokesVector s_out;
-  Matrix3X generators;  ///< Ω, 3 × n: J_c = Ω_c × S_out
-  Matrix3X jacobian;    ///< J = ∂S_out/∂φ, 3 × n
+  Matrix3 mueller;            ///< M = M_last ⋯ M_1
+  Matrix3X input_generators;  ///< Ω′ = MᵀΩ, 3 × n: MᵀJ_c = Ω′_c × S_in
+  Matrix3X generators;        ///< Ω, 3 × n: J_c = Ω_c × S_out (with_jacobian only)
+  Matrix3X jacobian;          ///< J = ∂S_out/∂φ, 3 × n (with_jacobian only)
 };
 
 class WaveplateChain {
@@ -74,11 +84,21 @@ class WaveplateChain {
   /// Real-time. Fills `pose` for control vector `phi` (size control_count()).
   void ComputePose(const ControlVector& phi, ChainPose* pose) const;
 
+  /// Real-time. The same pose, derived from `previous` (a pose of this chain; may be `pose`
+  /// itself) by angle addition when every element's angle moved by less than 2^-7 rad:
+  /// cos(θ+δ) = cos θ cos δ − sin θ sin δ with a short series for δ. That saves the library
+  /// sin/cos of successive commands, which differ little. Round-off grows like √steps ulp, so
+  /// the sines and cosines are re-evaluated exactly every kMaxIncrementalSteps updates (and on
+  /// any larger step): they stay within ~1e-14 of ComputePose's.
+  void ComputePoseFrom(const ChainPose& previous, const ControlVector& phi, ChainPose* pose) const;
+  static constexpr int kMaxIncrementalSteps = 256;
+
   /// Real-time. S_out = f(φ; S_in) (paper eq. 2).
   StokesVector Output(const ChainPose& pose, const StokesVector& s_in) const;
 
-  /// Real-time. S_out, Ω and J in one backward pass (paper eq. 9).
-  void Evaluate(const ChainPose& pose, const StokesVector& s_in, ChainKinematics* out) const;
+  /// Real-time. S_out, M and Ω′ in one forward pass; with_jacobian adds Ω and J (paper eq. 9).
+  void Evaluate(const ChainPose& pose, const StokesVector& s_in, ChainKinematics* out,
+                bool with_jacobian = true) const;
 
   /// The whole chain's Mueller matrix M_m ⋯ M_1.
   Matrix3 MuellerMatrix(const ChainPose& pose) const;
@@ -90,8 +110,9 @@ class WaveplateChain {
   StokesVector Output(const ControlVector& phi, const StokesVector& s_in) const;
   Matrix3X Jacobian(const ControlVector& phi, const StokesVector& s_in) const;
 
-  /// Clamps each control with a range into it; returns how many were outside.
+  /// Real-time. Clamps each control with a range into it; returns how many were outside.
   int ClampToRanges(ControlVector* phi) const;
+  bool has_ranges() const { return has_ranges_; }
 
   /// "R1 R3 R1".
   std::string Describe() const;
@@ -105,11 +126,18 @@ class WaveplateChain {
     double fixed_angle_rad;
   };
 
+  /// θ per control into `theta` and dθ/dφ into pose->dtheta_dphi; copies φ.
+  void ComputeAngles(const ControlVector& phi, ChainPose* pose, double* theta) const;
+
   std::vector<WaveplateStage> stages_;
   std::vector<ControlChannel> controls_;
   std::vector<int> stage_first_control_;
   std::vector<int> stage_end_element_;  ///< one past each stage's last element
   std::vector<Element> elements_;       ///< in the order the light meets them
+  bool all_linear_ = true;              ///< every control map is linear (fast path)
+  std::vector<double> linear_rad_per_unit_, linear_offset_rad_;
+  bool has_ranges_ = false;
+  std::vector<double> range_min_, range_max_;  ///< ±∞ for unbounded controls
 };
 
 }  // namespace dpc

@@ -50,7 +50,7 @@ SimulationResult ClosedLoopSimulator::Run(SimulationObserver* observer, int64_t 
   std::unique_ptr<ControlLaw> law =
       law_factory_(law_config_, chain.control_count(), target.is_point());
   ControlIntegrator integrator(chain, initial_phi_);
-  RunStatistics statistics(chain.control_count(), scenario_.controller.activation_s,
+  RunStatistics statistics(target, chain.control_count(), scenario_.controller.activation_s,
                            sim.lock_threshold_deg, sim.statistics_start_s);
 
   // The delay line: slot k mod D holds the command issued at sample k − D, as a pose.
@@ -66,60 +66,86 @@ SimulationResult ClosedLoopSimulator::Run(SimulationObserver* observer, int64_t 
   problem.chain = &chain;
   problem.target = &target;
   problem.loop_mode = scenario_.controller.loop;
+  problem.need_jacobian = law->needs_jacobian();
   ControlVector delta_phi;
 
   SimulationResult result;
   const auto start = std::chrono::steady_clock::now();
-  int64_t slot = 0;
+  // Blocks of up to D samples: a command issued in a block acts D samples later, so never in
+  // the same block. Each block first runs the input, the plant and the polarimeters for all its
+  // samples (independent of the block's commands), then the controller's updates in order. The
+  // results are those of the sample-by-sample loop; the processor overlaps the independent
+  // work instead of waiting on the controller's dependency chain.
+  const int64_t block = std::min<int64_t>(delay, kMaxBlock);
+  std::vector<StokesVector> in_measured(static_cast<size_t>(block));
+  std::vector<StokesVector> out_measured(static_cast<size_t>(block));
+  int64_t block_start_slot = 0;  // delay-line slot of the block's first sample
   int64_t until_trace = 0;
   int64_t k = 0;
-  for (; k < total_samples_; ++k) {
-    const double t_s = static_cast<double>(k) * dt_s;
-    const StokesVector& s_in = input.Next();
-    const ChainPose& applied = line[static_cast<size_t>(slot)];
-    const StokesVector s_out = chain.Output(applied, s_in);
-    const double error_rad = target.DistanceRad(s_out);
-    const bool active = k >= activation_sample_;
-    if (active) {
-      statistics.AddSample(t_s, error_rad, target.LeakFraction(s_out), applied.phi);
-    }
-    if (observer != nullptr && --until_trace < 0) {
-      observer->OnSample(SampleView{k, t_s, s_in, s_out, applied.phi, error_rad * kRadToDeg});
-      until_trace = decimation - 1;
-    }
-
-    bool issued = false;
-    if (active) {
-      if (k == activation_sample_) law->Activate(integrator.phi());
-      problem.pose = &line[static_cast<size_t>(latest)];
-      problem.s_in = input_polarimeter.Measure(s_in);
-      problem.s_out_measured = output_polarimeter.Measure(s_out);
-      UpdateControlProblem(&problem);
-      const ControlStatus status = law->ComputeUpdate(problem, &delta_phi);
-      const ControlIntegrator::Outcome outcome = integrator.Apply(status, delta_phi);
-      const ControlDiagnostics& diagnostics = law->diagnostics();
-      statistics.AddUpdate(diagnostics.nullspace_active, !IsUsable(status),
-                           status == ControlStatus::kRankDeficient,
-                           outcome == ControlIntegrator::Outcome::kClamped, diagnostics.sigma_min);
-      if (outcome != ControlIntegrator::Outcome::kRejected) {
-        ++version;
-        chain.ComputePose(integrator.phi(), &line[static_cast<size_t>(slot)]);
-        line_version[static_cast<size_t>(slot)] = version;
-        issued = true;
+  int64_t next_progress = kProgressInterval;
+  while (k < total_samples_) {
+    const int64_t count = std::min(block, total_samples_ - k);
+    // Phase 1: input, plant, measurement, statistics of the true output.
+    int64_t slot = block_start_slot;
+    for (int64_t i = 0; i < count; ++i) {
+      const int64_t sample = k + i;
+      const double t_s = static_cast<double>(sample) * dt_s;
+      const StokesVector& s_in = input.Next();
+      const ChainPose& applied = line[static_cast<size_t>(slot)];
+      const StokesVector s_out = chain.Output(applied, s_in);
+      if (sample >= activation_sample_) {
+        statistics.AddSample(t_s, s_out, applied.phi);
+        in_measured[static_cast<size_t>(i)] = input_polarimeter.Measure(s_in);
+        out_measured[static_cast<size_t>(i)] = output_polarimeter.Measure(s_out);
       }
+      if (observer != nullptr && --until_trace < 0) {
+        observer->OnSample(SampleView{sample, t_s, s_in, s_out, applied.phi,
+                                      target.DistanceRad(s_out) * kRadToDeg});
+        until_trace = decimation - 1;
+      }
+      if (++slot == delay) slot = 0;
     }
-    if (!issued && line_version[static_cast<size_t>(slot)] != version) {
-      line[static_cast<size_t>(slot)] = line[static_cast<size_t>(latest)];
-      line_version[static_cast<size_t>(slot)] = version;
+    // Phase 2: the controller, sample by sample; command k + i acts at k + i + D.
+    slot = block_start_slot;
+    for (int64_t i = 0; i < count; ++i) {
+      const int64_t sample = k + i;
+      bool issued = false;
+      if (sample >= activation_sample_) {
+        if (sample == activation_sample_) law->Activate(integrator.phi());
+        problem.pose = &line[static_cast<size_t>(latest)];
+        problem.s_in = in_measured[static_cast<size_t>(i)];
+        problem.s_out_measured = out_measured[static_cast<size_t>(i)];
+        UpdateControlProblem(&problem);
+        const ControlStatus status = law->ComputeUpdate(problem, &delta_phi);
+        const ControlIntegrator::Outcome outcome = integrator.Apply(status, delta_phi);
+        const ControlDiagnostics& diagnostics = law->diagnostics();
+        statistics.AddUpdate(diagnostics.nullspace_active, !IsUsable(status),
+                             status == ControlStatus::kRankDeficient,
+                             outcome == ControlIntegrator::Outcome::kClamped,
+                             diagnostics.singular_values);
+        if (outcome != ControlIntegrator::Outcome::kRejected) {
+          ++version;
+          chain.ComputePoseFrom(line[static_cast<size_t>(latest)], integrator.phi(),
+                                &line[static_cast<size_t>(slot)]);
+          line_version[static_cast<size_t>(slot)] = version;
+          issued = true;
+        }
+      }
+      if (!issued && line_version[static_cast<size_t>(slot)] != version) {
+        line[static_cast<size_t>(slot)] = line[static_cast<size_t>(latest)];
+        line_version[static_cast<size_t>(slot)] = version;
+      }
+      latest = slot;
+      if (++slot == delay) slot = 0;
     }
-    latest = slot;
-    if (++slot == delay) slot = 0;
-
-    if (observer != nullptr && ((k + 1) & (kProgressInterval - 1)) == 0 &&
-        !observer->OnProgress(k + 1, total_samples_)) {
-      ++k;
-      result.stopped_early = true;
-      break;
+    block_start_slot = slot;
+    k += count;
+    if (observer != nullptr && k >= next_progress) {
+      next_progress += kProgressInterval;
+      if (!observer->OnProgress(k, total_samples_)) {
+        result.stopped_early = true;
+        break;
+      }
     }
   }
   const double wall_s =

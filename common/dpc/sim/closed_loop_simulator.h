@@ -74,7 +74,10 @@ using ControlLawFactory =
 
 class ClosedLoopSimulator {
  public:
+  /// OnProgress comes about this often (at the end of the block that crosses each multiple).
   static constexpr int64_t kProgressInterval = int64_t{1} << 20;
+  /// The most samples processed per phase (see Run).
+  static constexpr int64_t kMaxBlock = 64;
 
   /// Validates the scenario (ValidateScenario: throws ScenarioError naming the bad field) and
   /// builds the device, target, law, input and polarimeters.

@@ -11,11 +11,9 @@
 namespace dpc {
 namespace {
 
-constexpr uint64_t kSignBit = uint64_t{1} << 63;
-constexpr uint64_t kInfinityBits = 0x7FF0000000000000ULL;  // +∞; larger magnitude bits: NaN
 constexpr int kMantissaBits = 52;
 
-uint64_t MagnitudeBits(double value) { return std::bit_cast<uint64_t>(value) & ~kSignBit; }
+uint64_t MagnitudeBits(double value) { return std::bit_cast<uint64_t>(value) & ~LogHistogram::kSignBit; }
 
 }  // namespace
 
@@ -55,38 +53,6 @@ LogHistogram::LogHistogram(double min_magnitude, double max_magnitude, int sub_b
   }
   zero_index_ = static_cast<int64_t>(bins_per_sign);
   bins_.assign(2 * bins_per_sign + 1, 0);
-}
-
-// Hot path: called once per sample; no allocation, no log(), one shift for the bin.
-void LogHistogram::Add(double value) noexcept {
-  const uint64_t bits = std::bit_cast<uint64_t>(value);
-  const uint64_t magnitude_bits = bits & ~kSignBit;
-  if (magnitude_bits > kInfinityBits) {  // NaN
-    ++nan_count_;
-    return;
-  }
-  ++count_;
-  min_ = std::min(min_, value);
-  max_ = std::max(max_, value);
-  AddToSum(value);
-  int64_t index = zero_index_;
-  if (magnitude_bits >= min_magnitude_bits_) {
-    const uint64_t key = std::min(magnitude_bits >> mantissa_shift_, max_key_);
-    const int64_t offset = static_cast<int64_t>(key - min_key_) + 1;
-    index = (bits & kSignBit) != 0 ? zero_index_ - offset : zero_index_ + offset;
-  }
-  ++bins_[static_cast<size_t>(index)];
-}
-
-void LogHistogram::AddToSum(double value) noexcept {
-  // Neumaier: the rounding error of each addition is recovered exactly into compensation_.
-  const double total = sum_ + value;
-  if (std::abs(sum_) >= std::abs(value)) {
-    compensation_ += (sum_ - total) + value;
-  } else {
-    compensation_ += (value - total) + sum_;
-  }
-  sum_ = total;
 }
 
 double LogHistogram::Percentile(double percent) const {

@@ -1,5 +1,7 @@
 #include "dpc/sim/run_statistics.h"
 
+#include "dpc/optics/count_dispatch.h"
+
 #include <cmath>
 
 namespace dpc {
@@ -7,69 +9,131 @@ namespace {
 
 constexpr double kLeakFloor = 1e-20;  // −200 dB: below the round-off of 1 − S·S*
 constexpr double kRadToDeg = 180.0 / M_PI;
+// 10·log10(x) = (10 / ln 10)·ln(x); glibc's log is faster than its log10, and the product adds
+// half an ulp.
+constexpr double kDecibelsPerNeper = 4.3429448190325182765;
 
-// Kahan–Babuška summation step.
+// Compensated summation step: Knuth's TwoSum recovers the rounding error of *sum + value
+// exactly, without a branch.
 inline void CompensatedAdd(double value, double* sum, double* compensation) {
-  const double t = *sum + value;
-  if (std::abs(*sum) >= std::abs(value)) {
-    *compensation += (*sum - t) + value;
-  } else {
-    *compensation += (value - t) + *sum;
-  }
-  *sum = t;
+  const double total = *sum + value;
+  const double value_part = total - *sum;
+  *compensation += (*sum - (total - value_part)) + (value - value_part);
+  *sum = total;
 }
 
 }  // namespace
 
-RunStatistics::RunStatistics(int control_count, double activation_s, double lock_threshold_deg,
-                             std::optional<double> statistics_start_s)
-    : activation_s_(activation_s),
+RunStatistics::RunStatistics(const Target& target, int control_count, double activation_s,
+                             double lock_threshold_deg, std::optional<double> statistics_start_s)
+    : target_(target),
+      control_count_(control_count),
+      activation_s_(activation_s),
       lock_threshold_rad_(lock_threshold_deg / kRadToDeg),
       fixed_start_s_(statistics_start_s),
+      pending_phi_(static_cast<size_t>(kBatch) * static_cast<size_t>(control_count)),
       error_deg_(1e-12, 360.0),
-      sigma_min_(1e-15, 1e6) {
+      sigma_min_squared_(1e-30, 1e12) {
   phi_.reserve(control_count);
   for (int c = 0; c < control_count; ++c) phi_.emplace_back(1e-12, 1e12);
 }
 
-void RunStatistics::AddSample(double t_s, double error_rad, double leak,
+void RunStatistics::AddSample(double t_s, const StokesVector& s_out,
                               const ControlVector& phi_applied) {
-  // Lock tracking.
-  const bool below = error_rad < lock_threshold_rad_;
-  if (below && !below_) {
-    below_since_s_ = t_s;
-    if (!first_lock_s_) first_lock_s_ = t_s;
-  } else if (!below && below_) {
-    ++excursions_;
-  }
-  below_ = below;
+  const int i = pending_;
+  pending_t_s_[i] = t_s;
+  pending_s_out_[i][0] = s_out[0];
+  pending_s_out_[i][1] = s_out[1];
+  pending_s_out_[i][2] = s_out[2];
+  double* phi = pending_phi_.data() + static_cast<size_t>(i) * control_count_;
+  DispatchCount(control_count_, [&](auto fixed) {
+    const int count = FixedOr(fixed, control_count_);
+    for (int c = 0; c < count; ++c) phi[c] = phi_applied[c];
+  });
+  if (++pending_ == kBatch) Flush();
+}
 
-  // Error window.
-  if (!window_open_) {
-    window_open_ = fixed_start_s_ ? t_s >= *fixed_start_s_ : first_lock_s_.has_value();
-    if (window_open_) window_start_s_ = t_s;
+void RunStatistics::Flush() const {
+  double sigma_min_squared[kBatch];
+  for (int i = 0; i < pending_updates_; ++i) {
+    sigma_min_squared[i] = pending_singular_values_[i].min_squared();
   }
-  if (window_open_) {
-    error_deg_.Add(error_rad * kRadToDeg);
-    CompensatedAdd(10.0 * std::log10(std::max(leak, kLeakFloor)), &leak_db_sum_,
-                   &leak_db_compensation_);
-    CompensatedAdd(leak, &leak_sum_, &leak_compensation_);
+  sigma_min_squared_.AddBatch(sigma_min_squared, pending_updates_);
+  pending_updates_ = 0;
+  const int count = pending_;
+  if (count == 0) return;
+  pending_ = 0;
+  // Independent per sample: the expensive part, pipelined across the batch.
+  double error_rad[kBatch], leak[kBatch];
+  if (target_.is_point()) {
+    // Target::DistanceAndLeak inlined for the common case: the chord |S − S*| = 2 sin(α/2).
+    const double tx = target_.point()[0], ty = target_.point()[1], tz = target_.point()[2];
+    for (int i = 0; i < count; ++i) {
+      const double dx = pending_s_out_[i][0] - tx, dy = pending_s_out_[i][1] - ty,
+                   dz = pending_s_out_[i][2] - tz;
+      const double chord_squared = dx * dx + dy * dy + dz * dz;
+      if (chord_squared <= 2.0) {
+        leak[i] = 0.25 * chord_squared;
+        error_rad[i] = 2.0 * std::asin(std::min(1.0, 0.5 * std::sqrt(chord_squared)));
+      } else {
+        const StokesVector s_out(pending_s_out_[i][0], pending_s_out_[i][1], pending_s_out_[i][2]);
+        target_.DistanceAndLeak(s_out, &error_rad[i], &leak[i]);
+      }
+    }
+  } else {
+    for (int i = 0; i < count; ++i) {
+      const StokesVector s_out(pending_s_out_[i][0], pending_s_out_[i][1], pending_s_out_[i][2]);
+      target_.DistanceAndLeak(s_out, &error_rad[i], &leak[i]);
+    }
   }
-
-  for (size_t c = 0; c < phi_.size(); ++c) phi_[c].Add(phi_applied[static_cast<int>(c)]);
+  // In time order: lock tracking and the error window.
+  double window_error_deg[kBatch];
+  int window_count = 0;
+  // Blocked sums: plain within the batch, compensated across batches.
+  double leak_db_batch[2] = {0.0, 0.0}, leak_batch[2] = {0.0, 0.0};
+  for (int i = 0; i < count; ++i) {
+    const double t_s = pending_t_s_[i];
+    const bool below = error_rad[i] < lock_threshold_rad_;
+    if (below && !below_) {
+      below_since_s_ = t_s;
+      if (!first_lock_s_) first_lock_s_ = t_s;
+    } else if (!below && below_) {
+      ++excursions_;
+    }
+    below_ = below;
+    if (!window_open_) {
+      window_open_ = fixed_start_s_ ? t_s >= *fixed_start_s_ : first_lock_s_.has_value();
+      if (window_open_) window_start_s_ = t_s;
+    }
+    if (window_open_) {
+      window_error_deg[window_count] = error_rad[i] * kRadToDeg;
+      leak_db_batch[window_count & 1] += kDecibelsPerNeper * std::log(std::max(leak[i], kLeakFloor));
+      leak_batch[window_count & 1] += leak[i];
+      ++window_count;
+    }
+  }
+  CompensatedAdd(leak_db_batch[0] + leak_db_batch[1], &leak_db_sum_, &leak_db_compensation_);
+  CompensatedAdd(leak_batch[0] + leak_batch[1], &leak_sum_, &leak_compensation_);
+  error_deg_.AddBatch(window_error_deg, window_count);
+  // Controls, one histogram at a time.
+  for (int c = 0; c < control_count_; ++c) {
+    phi_[c].AddBatch(pending_phi_.data() + c, count, control_count_);
+  }
 }
 
 void RunStatistics::AddUpdate(bool nullspace_active, bool failed, bool rank_deficient,
-                              bool clamped, double sigma_min) {
+                              bool clamped, const SingularValues& singular_values) {
   ++updates_;
   nullspace_active_ += nullspace_active;
   failed_ += failed;
   rank_deficient_ += rank_deficient;
   clamped_ += clamped;
-  sigma_min_.Add(sigma_min);
+  pending_singular_values_[pending_updates_] = singular_values;
+  if (++pending_updates_ == kBatch) Flush();
 }
 
 RunSummary RunStatistics::Summarize(int64_t samples, int64_t resets) const {
+  Flush();
   RunSummary s;
   s.samples = samples;
   s.statistics_samples = error_deg_.count();
@@ -102,8 +166,10 @@ RunSummary RunStatistics::Summarize(int64_t samples, int64_t resets) const {
   s.rank_deficient_updates = rank_deficient_;
   s.clamped_updates = clamped_;
   s.resets = resets;
-  s.sigma_min_min = sigma_min_.count() ? sigma_min_.min() : NAN;
-  s.sigma_min_p1 = sigma_min_.count() ? sigma_min_.Percentile(1.0) : NAN;
+  // σ² was recorded (one square root fewer per update); the square root is monotonic.
+  const bool have_sigma = sigma_min_squared_.count() > 0;
+  s.sigma_min_min = have_sigma ? std::sqrt(sigma_min_squared_.min()) : NAN;
+  s.sigma_min_p1 = have_sigma ? std::sqrt(sigma_min_squared_.Percentile(1.0)) : NAN;
   return s;
 }
 

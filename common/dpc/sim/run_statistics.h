@@ -20,6 +20,8 @@
 #include <optional>
 #include <vector>
 
+#include "dpc/control/singular_values.h"
+#include "dpc/control/target.h"
 #include "dpc/optics/stokes.h"
 #include "dpc/sim/log_histogram.h"
 
@@ -52,43 +54,63 @@ struct RunSummary {
 
 class RunStatistics {
  public:
-  /// `statistics_start_s`: fixed window start, or nullopt for "from the first lock".
-  RunStatistics(int control_count, double activation_s, double lock_threshold_deg,
-                std::optional<double> statistics_start_s);
+  /// Samples are buffered and folded into the statistics this many at a time: independent
+  /// square roots, arcsines and logarithms then overlap in the pipeline instead of lengthening
+  /// each sample's dependency chain.
+  static constexpr int kBatch = 256;
 
-  /// Real-time. One sample at time t_s after activation: the true error angle (radians), the
-  /// polarizer leak, and the applied controls.
-  void AddSample(double t_s, double error_rad, double leak, const ControlVector& phi_applied);
+  /// `statistics_start_s`: fixed window start, or nullopt for "from the first lock". Keeps a
+  /// reference to `target`.
+  RunStatistics(const Target& target, int control_count, double activation_s,
+                double lock_threshold_deg, std::optional<double> statistics_start_s);
 
-  /// Real-time. One controller update's outcome.
+  /// Real-time. One sample at time t_s from activation on: the true S_out and the applied
+  /// controls. Samples must come in time order.
+  void AddSample(double t_s, const StokesVector& s_out, const ControlVector& phi_applied);
+
+  /// Real-time. One controller update's outcome (the singular values are evaluated in
+  /// batches, off the control loop).
   void AddUpdate(bool nullspace_active, bool failed, bool rank_deficient, bool clamped,
-                 double sigma_min);
+                 const SingularValues& singular_values);
 
   /// The summary so far; `samples` is the total simulated sample count, `resets` the law's.
   RunSummary Summarize(int64_t samples, int64_t resets) const;
 
  private:
+  /// Folds the buffered samples into the statistics.
+  void Flush() const;
+
+  const Target& target_;
+  int control_count_;
   double activation_s_;
   double lock_threshold_rad_;
   std::optional<double> fixed_start_s_;
 
+  // Buffered samples (mutable: Summarize flushes them).
+  mutable int pending_ = 0;
+  mutable double pending_t_s_[kBatch];
+  mutable double pending_s_out_[kBatch][3];
+  mutable std::vector<double> pending_phi_;  ///< kBatch × control_count, sample-major
+
   // Error window.
-  bool window_open_ = false;
-  double window_start_s_ = NAN;
-  LogHistogram error_deg_;
-  double leak_db_sum_ = 0.0, leak_db_compensation_ = 0.0;
-  double leak_sum_ = 0.0, leak_compensation_ = 0.0;
+  mutable bool window_open_ = false;
+  mutable double window_start_s_ = NAN;
+  mutable LogHistogram error_deg_;
+  mutable double leak_db_sum_ = 0.0, leak_db_compensation_ = 0.0;
+  mutable double leak_sum_ = 0.0, leak_compensation_ = 0.0;
 
   // Lock tracking.
-  bool below_ = false;
-  double below_since_s_ = NAN;
-  std::optional<double> first_lock_s_;
-  int64_t excursions_ = 0;
+  mutable bool below_ = false;
+  mutable double below_since_s_ = NAN;
+  mutable std::optional<double> first_lock_s_;
+  mutable int64_t excursions_ = 0;
 
   // Controls and controller.
-  std::vector<LogHistogram> phi_;
+  mutable std::vector<LogHistogram> phi_;
   int64_t updates_ = 0, nullspace_active_ = 0, failed_ = 0, rank_deficient_ = 0, clamped_ = 0;
-  LogHistogram sigma_min_;
+  mutable int pending_updates_ = 0;
+  mutable SingularValues pending_singular_values_[kBatch];
+  mutable LogHistogram sigma_min_squared_;
 };
 
 }  // namespace dpc

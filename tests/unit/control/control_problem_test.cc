@@ -44,13 +44,18 @@ TEST_F(ControlProblemTest, TangentReductionKeepsTransposeAndRegularizedSolutions
   }
 }
 
-TEST_F(ControlProblemTest, TaskJacobianIsTheJacobianInTangentCoordinates) {
+TEST_F(ControlProblemTest, TaskJacobianIsTheInputFrameJacobianInTangentCoordinates) {
   const Target target = Target::Point(StokesVector(0, 0.6, 0.8));
   ControlProblem& p = Build(RandomPhi(), RandomSop(), target);
   Eigen::Matrix<double, 2, 3> e;
   e.row(0) = p.tangent_e1.transpose();
   e.row(1) = p.tangent_e2.transpose();
-  EXPECT_LT((Eigen::MatrixXd(p.task_jacobian) - e * p.kinematics.jacobian).norm(), 1e-13);
+  // T = Eᵀ MᵀJ with E the tangent basis at S_in.
+  EXPECT_LT(p.tangent_e1.dot(p.s_in), 1e-15);
+  EXPECT_LT((Eigen::MatrixXd(p.task_jacobian) -
+             e * p.kinematics.mueller.transpose() * p.kinematics.jacobian)
+                .norm(),
+            1e-13);
 }
 
 TEST_F(ControlProblemTest, SetTargetTaskIsNormalTimesJacobian) {

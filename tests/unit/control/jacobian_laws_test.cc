@@ -78,8 +78,8 @@ TEST_F(JacobianLawsTest, PseudoInverseMatchesSvd) {
           0.1 * SvdPseudoInverse(f->FullTaskJacobian()) * f->FullTaskError();
       EXPECT_LT((Eigen::VectorXd(delta) - expected).norm(), 1e-10 * std::max(1.0, expected.norm()));
       Eigen::JacobiSVD<Eigen::MatrixXd> svd(f->FullTaskJacobian());
-      EXPECT_NEAR(law.diagnostics().sigma_max, svd.singularValues()[0], 1e-12);
-      EXPECT_NEAR(law.diagnostics().sigma_min, svd.singularValues()[1], 1e-10);
+      EXPECT_NEAR(law.diagnostics().singular_values.max(), svd.singularValues()[0], 1e-12);
+      EXPECT_NEAR(law.diagnostics().singular_values.min(), svd.singularValues()[1], 1e-10);
     }
   }
 }

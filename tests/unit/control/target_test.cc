@@ -21,6 +21,18 @@ TEST(TargetTest, PointDistanceAndLeak) {
   EXPECT_NEAR(10 * std::log10(target.LeakFraction(s)), -40.0, 0.01);
 }
 
+TEST(TargetTest, DistanceAndLeakAreAccurateForTinyAndHugeErrors) {
+  const Target target = Target::Point(StokesVector(0, 0.6, 0.8));
+  for (double alpha : {1e-12, 1e-8, 1e-4, 0.5, 1.5, 2.0, 3.0, M_PI - 1e-6}) {
+    const StokesVector s(std::sin(alpha), 0.6 * std::cos(alpha), 0.8 * std::cos(alpha));
+    double distance, leak;
+    target.DistanceAndLeak(s, &distance, &leak);
+    EXPECT_NEAR(distance, alpha, 2e-15 * std::max(1.0, alpha) + 1e-3 * alpha * 1e-12) << alpha;
+    const double expected = std::pow(std::sin(alpha / 2), 2);
+    EXPECT_NEAR(leak / expected, 1.0, 1e-9) << alpha;  // no cancellation at 1e-12 rad
+  }
+}
+
 TEST(TargetTest, PointMustBeUnit) {
   EXPECT_THROW(Target::Point(StokesVector(0, 0.6, 0.9)), std::invalid_argument);
   EXPECT_THROW(Target::Point(StokesVector(NAN, 0, 1)), std::invalid_argument);

@@ -39,6 +39,12 @@ class WaveplateChainTest : public ::testing::Test {
       EXPECT_LT((k.jacobian - numeric).norm(), fd_tolerance * std::max(1.0, numeric.norm()))
           << chain.Describe() << "\nclosed form\n" << k.jacobian << "\nnumeric\n" << numeric;
       EXPECT_LT((k.s_out - chain.Output(pose, s_in)).norm(), 1e-14);
+      EXPECT_LT((k.mueller - chain.MuellerMatrix(pose)).norm(), 1e-13);
+      // Input frame: MᵀJ_c = Ω′_c × S_in.
+      for (int c = 0; c < chain.control_count(); ++c) {
+        const Vector3 pulled_back = k.mueller.transpose() * k.jacobian.col(c);
+        EXPECT_LT((pulled_back - Vector3(k.input_generators.col(c)).cross(s_in)).norm(), 1e-12);
+      }
       for (int c = 0; c < chain.control_count(); ++c) {
         EXPECT_NEAR(k.jacobian.col(c).dot(k.s_out), 0.0, 1e-13);
       }
@@ -136,6 +142,27 @@ TEST_F(WaveplateChainTest, TableMapsUseTheirNumericDerivative) {
   const WaveplateChain chain(std::move(stages));
   // Finite differences with h = 1e-6 straddle a knot only within 1e-6 of it; random φ do not.
   ExpectJacobianProperties(chain, 1e-7);
+}
+
+TEST_F(WaveplateChainTest, IncrementalPoseStaysWithinRoundOffOfTheExactOne) {
+  const WaveplateChain chain = WaveplateChain::FromAxes("3131");
+  ControlVector phi = RandomPhi(4);
+  ChainPose incremental, exact;
+  chain.ComputePose(phi, &incremental);
+  double worst = 0.0;
+  for (int step = 0; step < 3000; ++step) {
+    for (int c = 0; c < 4; ++c) phi[c] += 1e-3 * normal_(rng_);
+    if (step == 1000) phi[2] += 0.5;  // a large step: exact sines and cosines again
+    chain.ComputePoseFrom(incremental, phi, &incremental);
+    chain.ComputePose(phi, &exact);
+    for (int e = 0; e < 4; ++e) {
+      worst = std::max(worst, std::abs(incremental.cos[e] - exact.cos[e]));
+      worst = std::max(worst, std::abs(incremental.sin[e] - exact.sin[e]));
+      EXPECT_EQ(incremental.angle_rad[e], exact.angle_rad[e]);
+    }
+  }
+  EXPECT_LT(worst, 1e-13);
+  EXPECT_LE(incremental.incremental_steps, WaveplateChain::kMaxIncrementalSteps);
 }
 
 TEST_F(WaveplateChainTest, StageStatesEndAtTheOutput) {

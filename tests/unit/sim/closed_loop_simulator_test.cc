@@ -54,8 +54,9 @@ TEST_F(ClosedLoopSimulatorTest, PaperScenarioLocksWithGradientProjection) {
     const SimulationResult r = simulator.Run();
     const RunSummary& s = r.summary;
     EXPECT_EQ(s.samples, 200000);
-    ASSERT_TRUE(s.lock_time_s.has_value()) << axes;
-    EXPECT_LT(*s.lock_time_s, 0.5e-3) << axes;
+    ASSERT_TRUE(s.first_lock_time_s.has_value()) << axes;
+    EXPECT_LT(*s.first_lock_time_s, 0.1e-3) << axes;  // below 10° within 5000 samples
+    ASSERT_TRUE(s.lock_time_s.has_value()) << axes;     // and below at the end
     // With the paper's 1 µs delay the input turns ~0.1 rad while a command is in flight: the
     // tracking error sits near 5–6°, far below the lock threshold.
     EXPECT_GT(s.error_deg.mean, 2.0) << axes;
@@ -131,6 +132,7 @@ TEST_F(ClosedLoopSimulatorTest, MeasuredLoopFollowsItsStabilityLimit) {
   s.controller.activation_s = 0.0;
   s.simulation.delay_s = 1e-7;  // 5 samples
   s.controller.method = ControlMethod::kPseudoInverse;
+  s.simulation.statistics_start_s = 0.3e-3;  // the last 5000 samples
   s.controller.step = 0.30;
   const RunSummary stable = ClosedLoopSimulator(s).Run().summary;
   s.controller.step = 0.40;
@@ -181,10 +183,14 @@ TEST_F(ClosedLoopSimulatorTest, ObserverGetsDecimatedSamplesProgressAndCanStop) 
   r.stop_after = ClosedLoopSimulator::kProgressInterval;
   const SimulationResult result = ClosedLoopSimulator(s).Run(&r, 1000);
   EXPECT_TRUE(result.stopped_early);
-  EXPECT_EQ(result.summary.samples, ClosedLoopSimulator::kProgressInterval);
+  // Progress comes at the end of the block (≤ D samples) that crosses the interval.
+  const int64_t done = result.summary.samples;
+  EXPECT_GE(done, ClosedLoopSimulator::kProgressInterval);
+  EXPECT_LT(done, ClosedLoopSimulator::kProgressInterval + 50);
   ASSERT_EQ(r.progress_calls.size(), 1u);
+  EXPECT_EQ(r.progress_calls[0].first, done);
   EXPECT_EQ(r.progress_calls[0].second, 2500000);
-  EXPECT_EQ(r.t_s.size(), static_cast<size_t>((ClosedLoopSimulator::kProgressInterval + 999) / 1000));
+  EXPECT_EQ(r.t_s.size(), static_cast<size_t>((done + 999) / 1000));
   EXPECT_NEAR(r.t_s[1] - r.t_s[0], 1000 / 50e6, 1e-15);
 }
 

@@ -345,3 +345,36 @@ TEST(LogHistogramConstructorTest, FinerBinsAreMoreAccurate) {
 
 }  // namespace
 }  // namespace dpc
+
+namespace dpc {
+namespace {
+
+TEST(LogHistogramBatchTest, AddBatchEqualsAddOneByOne) {
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> normal(0.0, 3.0);
+  std::vector<double> values(1000);
+  for (auto& v : values) v = normal(rng);
+  values[17] = NAN;
+  values[18] = 0.0;
+  LogHistogram one, batch, strided;
+  for (double v : values) one.Add(v);
+  batch.AddBatch(values.data(), 600);
+  batch.AddBatch(values.data() + 600, 400);
+  std::vector<double> interleaved;
+  for (double v : values) {
+    interleaved.push_back(v);
+    interleaved.push_back(99.0);  // the other column
+  }
+  strided.AddBatch(interleaved.data(), 1000, 2);
+  for (const LogHistogram* h : {&batch, &strided}) {
+    EXPECT_EQ(h->count(), one.count());
+    EXPECT_EQ(h->nan_count(), one.nan_count());
+    EXPECT_EQ(h->min(), one.min());
+    EXPECT_EQ(h->max(), one.max());
+    EXPECT_NEAR(h->sum(), one.sum(), 1e-12 * std::abs(one.sum()) + 1e-12);
+    for (double p : {1.0, 50.0, 99.0}) EXPECT_EQ(h->Percentile(p), one.Percentile(p));
+  }
+}
+
+}  // namespace
+}  // namespace dpc

@@ -9,17 +9,28 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
+const Target kTarget = Target::Point(StokesVector(0, 0.6, 0.8));
+
 ControlVector Phi(double a, double b) {
   ControlVector v(2);
   v << a, b;
   return v;
 }
 
+// A unit S_out at `error_rad` from the target point.
+StokesVector At(double error_rad) {
+  const Vector3 p = kTarget.point(), q(1, 0, 0);  // q ⊥ p
+  return std::cos(error_rad) * p + std::sin(error_rad) * q;
+}
+
+// A unit S_out whose polarizer leak is `leak` (= sin²(α/2)).
+StokesVector WithLeak(double leak) { return At(2.0 * std::asin(std::sqrt(leak))); }
+
 TEST(RunStatisticsTest, LockTimeIsTheStartOfTheFinalStretchBelowThreshold) {
-  RunStatistics stats(2, 1.0, 10.0, std::nullopt);
+  RunStatistics stats(kTarget, 2, 1.0, 10.0, std::nullopt);
   const double errors_deg[] = {50, 20, 5, 4, 30, 3, 2, 1};  // below at 2, above at 4, below from 5
   for (int k = 0; k < 8; ++k) {
-    stats.AddSample(1.0 + 0.1 * k, errors_deg[k] * kDeg, 0.0, Phi(0, 0));
+    stats.AddSample(1.0 + 0.1 * k, At(errors_deg[k] * kDeg), Phi(0, 0));
   }
   const RunSummary s = stats.Summarize(8, 0);
   ASSERT_TRUE(s.lock_time_s.has_value());
@@ -31,21 +42,22 @@ TEST(RunStatisticsTest, LockTimeIsTheStartOfTheFinalStretchBelowThreshold) {
   EXPECT_EQ(s.statistics_samples, 6);
   EXPECT_NEAR(s.statistics_start_s, 1.2, 1e-12);
   EXPECT_NEAR(s.error_deg.mean, 45.0 / 6.0, 1e-9);
+  EXPECT_NEAR(s.error_deg.p50, 3.5, 1.5);
   EXPECT_NEAR(s.error_deg.max, 30.0, 1e-9);
 }
 
 TEST(RunStatisticsTest, NoLockWhenTheRunEndsAboveThreshold) {
-  RunStatistics stats(2, 0.0, 10.0, std::nullopt);
-  stats.AddSample(0.0, 5 * kDeg, 0, Phi(0, 0));
-  stats.AddSample(0.1, 50 * kDeg, 0, Phi(0, 0));
+  RunStatistics stats(kTarget, 2, 0.0, 10.0, std::nullopt);
+  stats.AddSample(0.0, At(5 * kDeg), Phi(0, 0));
+  stats.AddSample(0.1, At(50 * kDeg), Phi(0, 0));
   const RunSummary s = stats.Summarize(2, 0);
   EXPECT_FALSE(s.lock_time_s.has_value());
   EXPECT_TRUE(s.first_lock_time_s.has_value());
 }
 
 TEST(RunStatisticsTest, NeverLockedMeansNoErrorStatistics) {
-  RunStatistics stats(2, 0.0, 1.0, std::nullopt);
-  stats.AddSample(0.0, 5 * kDeg, 0, Phi(0, 0));
+  RunStatistics stats(kTarget, 2, 0.0, 1.0, std::nullopt);
+  stats.AddSample(0.0, At(5 * kDeg), Phi(0, 0));
   const RunSummary s = stats.Summarize(1, 0);
   EXPECT_FALSE(s.first_lock_time_s.has_value());
   EXPECT_EQ(s.statistics_samples, 0);
@@ -53,26 +65,26 @@ TEST(RunStatisticsTest, NeverLockedMeansNoErrorStatistics) {
 }
 
 TEST(RunStatisticsTest, FixedWindowStartAndExtinctionMeans) {
-  RunStatistics stats(2, 0.0, 10.0, 0.15);
-  stats.AddSample(0.1, 50 * kDeg, 0.5, Phi(0, 0));   // before the window
-  stats.AddSample(0.2, 20 * kDeg, 1e-2, Phi(0, 0));  // −20 dB
-  stats.AddSample(0.3, 20 * kDeg, 1e-4, Phi(0, 0));  // −40 dB
+  RunStatistics stats(kTarget, 2, 0.0, 10.0, 0.15);
+  stats.AddSample(0.1, WithLeak(0.5), Phi(0, 0));   // before the window
+  stats.AddSample(0.2, WithLeak(1e-2), Phi(0, 0));  // −20 dB
+  stats.AddSample(0.3, WithLeak(1e-4), Phi(0, 0));  // −40 dB
   const RunSummary s = stats.Summarize(3, 0);
   EXPECT_EQ(s.statistics_samples, 2);
-  EXPECT_NEAR(s.extinction_db_mean, -30.0, 1e-12);
-  EXPECT_NEAR(s.extinction_db_power_mean, 10 * std::log10(0.5 * (1e-2 + 1e-4)), 1e-12);
+  EXPECT_NEAR(s.extinction_db_mean, -30.0, 1e-9);
+  EXPECT_NEAR(s.extinction_db_power_mean, 10 * std::log10(0.5 * (1e-2 + 1e-4)), 1e-9);
 }
 
 TEST(RunStatisticsTest, PerfectAlignmentIsFlooredNotMinusInfinity) {
-  RunStatistics stats(2, 0.0, 10.0, 0.0);
-  stats.AddSample(0.0, 0.0, 0.0, Phi(0, 0));
+  RunStatistics stats(kTarget, 2, 0.0, 10.0, 0.0);
+  stats.AddSample(0.0, kTarget.point(), Phi(0, 0));
   EXPECT_NEAR(stats.Summarize(1, 0).extinction_db_mean, -200.0, 1e-9);
 }
 
 TEST(RunStatisticsTest, ControlExtremesAndPercentiles) {
-  RunStatistics stats(2, 0.0, 10.0, std::nullopt);
+  RunStatistics stats(kTarget, 2, 0.0, 10.0, std::nullopt);
   for (int k = 0; k <= 1000; ++k) {
-    stats.AddSample(k * 1e-3, 1 * kDeg, 0, Phi(-1.0 + 0.002 * k, 3.0));
+    stats.AddSample(k * 1e-3, At(1 * kDeg), Phi(-1.0 + 0.002 * k, 3.0));
   }
   const RunSummary s = stats.Summarize(1001, 0);
   EXPECT_NEAR(s.phi_min[0], -1.0, 1e-12);
@@ -82,11 +94,34 @@ TEST(RunStatisticsTest, ControlExtremesAndPercentiles) {
   EXPECT_NEAR(s.phi_p1[1], 3.0, 1e-9);
 }
 
+TEST(RunStatisticsTest, BatchBoundariesDoNotChangeTheResult) {
+  // More samples than one batch, with a lock in the middle of the second batch.
+  RunStatistics batched(kTarget, 2, 0.0, 10.0, std::nullopt);
+  const int n = 3 * RunStatistics::kBatch + 17;
+  double sum_deg = 0.0;
+  int counted = 0;
+  for (int k = 0; k < n; ++k) {
+    const double error_deg = k < RunStatistics::kBatch + 100 ? 30.0 : 1.0 + 0.001 * k;
+    batched.AddSample(k * 1e-6, At(error_deg * kDeg), Phi(0.001 * k, -0.002 * k));
+    if (k >= RunStatistics::kBatch + 100) {
+      sum_deg += error_deg;
+      ++counted;
+    }
+  }
+  const RunSummary s = batched.Summarize(n, 0);
+  ASSERT_TRUE(s.first_lock_time_s.has_value());
+  EXPECT_NEAR(*s.first_lock_time_s, (RunStatistics::kBatch + 100) * 1e-6, 1e-12);
+  EXPECT_EQ(s.statistics_samples, counted);
+  EXPECT_NEAR(s.error_deg.mean, sum_deg / counted, 1e-9);
+  EXPECT_NEAR(s.phi_max[0], 0.001 * (n - 1), 1e-12);
+  EXPECT_NEAR(s.phi_min[1], -0.002 * (n - 1), 1e-12);
+}
+
 TEST(RunStatisticsTest, UpdateCounters) {
-  RunStatistics stats(2, 0.0, 10.0, std::nullopt);
-  stats.AddUpdate(true, false, false, false, 0.5);
-  stats.AddUpdate(false, true, false, false, 0.1);
-  stats.AddUpdate(true, false, true, true, 0.01);
+  RunStatistics stats(kTarget, 2, 0.0, 10.0, std::nullopt);
+  stats.AddUpdate(true, false, false, false, SingularValues::Exact(1.0, 0.5));
+  stats.AddUpdate(false, true, false, false, SingularValues::FromGram(0.01));
+  stats.AddUpdate(true, false, true, true, SingularValues::FromGram(4.0, 1e-4, 0.0, 4e-4));
   const RunSummary s = stats.Summarize(3, 7);
   EXPECT_EQ(s.updates, 3);
   EXPECT_NEAR(s.nullspace_active_fraction, 2.0 / 3.0, 1e-15);

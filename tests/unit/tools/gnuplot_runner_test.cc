@@ -1,4 +1,4 @@
-#include "dpc/gnuplot_runner.h"
+#include "gnuplot_runner.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-#include "dpc/paper_figure.h"
+#include "paper_figure.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

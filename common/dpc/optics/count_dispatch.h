@@ -1,0 +1,34 @@
+#pragma once
+// Compile-time loop counts for the common small cases.
+//
+// The real-time kernels loop over 3 or 4 stages (the paper's devices) far more often than over
+// anything else; with a runtime count those loops pay for alias checks, vectorization prologues
+// and loop control that cost more than the arithmetic. DispatchCount calls f with
+// std::integral_constant<int, n> for n = 3 and 4, and with 0 ("use the runtime count")
+// otherwise, so one kernel body serves every count and the common ones unroll fully:
+//
+//   DispatchCount(n, [&](auto fixed) {
+//     const int count = FixedOr(fixed, n);
+//     for (int i = 0; i < count; ++i) …
+//   });
+
+#include <type_traits>
+
+namespace dpc {
+
+template <typename F>
+inline decltype(auto) DispatchCount(int n, F&& f) {
+  switch (n) {
+    case 3: return f(std::integral_constant<int, 3>{});
+    case 4: return f(std::integral_constant<int, 4>{});
+    default: return f(std::integral_constant<int, 0>{});
+  }
+}
+
+/// The compile-time count if there is one, else the runtime `n`.
+template <int kFixed>
+constexpr int FixedOr(std::integral_constant<int, kFixed>, int n) {
+  return kFixed > 0 ? kFixed : n;
+}
+
+}  // namespace dpc

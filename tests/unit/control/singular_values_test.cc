@@ -1,0 +1,40 @@
+#include "dpc/control/singular_values.h"
+
+#include <Eigen/LU>
+#include <Eigen/SVD>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace dpc {
+namespace {
+
+TEST(SingularValuesTest, FromTheGramMatrixOfATwoRowMatrix) {
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> normal;
+  for (int trial = 0; trial < 50; ++trial) {
+    Eigen::Matrix<double, 2, 4> a;
+    for (int i = 0; i < 2; ++i)
+      for (int j = 0; j < 4; ++j) a(i, j) = normal(rng);
+    const Eigen::Matrix2d g = a * a.transpose();
+    const SingularValues s =
+        SingularValues::FromGram(g(0, 0), g(1, 1), g(0, 1), g.determinant());
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(a);
+    EXPECT_NEAR(s.max(), svd.singularValues()[0], 1e-12);
+    EXPECT_NEAR(s.min(), svd.singularValues()[1], 1e-12);
+    EXPECT_NEAR(s.min_squared(), std::pow(svd.singularValues()[1], 2), 1e-11);
+  }
+}
+
+TEST(SingularValuesTest, OneRowAndExactValues) {
+  EXPECT_DOUBLE_EQ(SingularValues::FromGram(9.0).max(), 3.0);
+  EXPECT_DOUBLE_EQ(SingularValues::FromGram(9.0).min(), 3.0);
+  EXPECT_EQ(SingularValues::Exact(2.0, 0.5).max(), 2.0);
+  EXPECT_EQ(SingularValues::Exact(2.0, 0.5).min(), 0.5);
+  EXPECT_EQ(SingularValues::FromGram(0.0, 0.0, 0.0, 0.0).min(), 0.0);
+  EXPECT_EQ(SingularValues().max(), 0.0);
+}
+
+}  // namespace
+}  // namespace dpc
