@@ -14,7 +14,7 @@ trap 'rm -f "$report"' EXIT
   --json --no-progress 2>"$report" | python3 -c '
 import json, sys
 r = json.load(sys.stdin)
-print(f"samples {r[\"samples\"]:.3g}  speed {r[\"samples_per_s\"]/1e6:.2f} M samples/s  "
-      f"error mean {r[\"error_deg\"][\"mean\"]:.3f} deg")'
+print("samples %.3g  speed %.2f M samples/s  error mean %.3f deg"
+      % (r["samples"], r["samples_per_s"] / 1e6, r["error_deg"]["mean"]))'
 rss_kb=$(awk -F': ' '/Maximum resident set size/ {print $2}' "$report")
 echo "peak RSS $((rss_kb / 1024)) MB (goal < 50 MB)"

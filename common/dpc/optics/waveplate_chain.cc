@@ -53,6 +53,13 @@ WaveplateChain::WaveplateChain(std::vector<WaveplateStage> stages) : stages_(std
     throw std::invalid_argument(fmt::format("a waveplate chain has at most {} controls (got {})",
                                             kMaxControls, controls_.size()));
   }
+  std::vector<bool> seen(controls_.size(), false);
+  for (Element& el : elements_) {
+    if (el.control >= 0 && !seen[el.control]) {
+      el.first_of_control = true;
+      seen[el.control] = true;
+    }
+  }
   for (const ControlChannel& channel : controls_) {
     all_linear_ = all_linear_ && channel.map.kind() == ControlMap::Kind::kLinear;
     linear_rad_per_unit_.push_back(channel.map.linear_rad_per_unit());
@@ -186,8 +193,9 @@ void WaveplateChain::Evaluate(const ChainPose& pose, const StokesVector& s_in,
   DispatchCount(elements == n ? n : 0, [&](auto fixed) {
     const int count = FixedOr(fixed, n);
     const int element_count = FixedOr(fixed, elements);
-    double* g = out->input_generators.data();  // column-major, 3 × n
-    for (int i = 0; i < 3 * count; ++i) g[i] = 0.0;
+    // Column-major, 3 × n. Every control drives at least one element; the first assigns its
+    // column (no zeroing pass), later ones (adjustable-axis stages) add to it.
+    double* g = out->input_generators.data();
     const double* derivative = pose.dtheta_dphi.data();
     // B_e = M_e ⋯ M_1 in named locals (b_rc: row r, column c) so that it stays in registers.
     double b00 = 1, b01 = 0, b02 = 0, b10 = 0, b11 = 1, b12 = 0, b20 = 0, b21 = 0, b22 = 1;
@@ -195,9 +203,15 @@ void WaveplateChain::Evaluate(const ChainPose& pose, const StokesVector& s_in,
       if (el.control < 0) return;
       const double f = el.sign * derivative[el.control];
       double* gc = g + 3 * el.control;
-      gc[0] += f * x;
-      gc[1] += f * y;
-      gc[2] += f * z;
+      if (el.first_of_control) {
+        gc[0] = f * x;
+        gc[1] = f * y;
+        gc[2] = f * z;
+      } else {
+        gc[0] += f * x;
+        gc[1] += f * y;
+        gc[2] += f * z;
+      }
     };
     for (int e = 0; e < element_count; ++e) {
       const Element& el = elements_[e];

@@ -124,6 +124,7 @@ class WaveplateChain {
     int control;       ///< driving control, or -1 for a fixed angle
     double sign;       ///< θ_e = sign·θ_control
     double fixed_angle_rad;
+    bool first_of_control = false;  ///< the first element (in light order) its control drives
   };
 
   /// θ per control into `theta` and dθ/dφ into pose->dtheta_dphi; copies φ.
