@@ -29,7 +29,10 @@ void ScenarioOverrides::AddTo(CLI::App& app) {
   app.add_option("--lock-threshold-deg", lock_threshold_deg,
                  "Lock: the error stays below this (deg); default 10");
   app.add_option("--statistics-from-s", statistics_from_s,
-                 "Error statistics from this time (s); default: from the first lock");
+                 "Error statistics from this time (s); default: settle samples after the first "
+                 "lock");
+  app.add_option("--settle-samples", settle_samples,
+                 "Samples after the first lock left out of the error statistics (default 1000)");
 }
 
 void ScenarioOverrides::Apply(ScenarioConfig* s) const {
@@ -82,6 +85,7 @@ void ScenarioOverrides::Apply(ScenarioConfig* s) const {
   set(s->simulation.sample_rate_hz, sample_rate_hz, "simulation.sample_rate_hz",
       "--sample-rate-hz");
   set(s->simulation.seed, seed, "simulation.seed", "--seed");
+  set(s->simulation.settle_samples, settle_samples, "simulation.settle_samples", "--settle-samples");
   set(s->simulation.polarimeter_noise_deg, noise_deg, "simulation.polarimeter_noise_deg",
       "--noise-deg");
   set(s->simulation.lock_threshold_deg, lock_threshold_deg, "simulation.lock_threshold_deg",

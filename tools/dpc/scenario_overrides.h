@@ -11,7 +11,7 @@
 //                           adds a paper scrambler if the input has neither
 //   --static                the input SOP holds still (removes every disturbance)
 //   --duration-s, --delay-s, --sample-rate-hz, --seed, --noise-deg, --lock-threshold-deg,
-//   --statistics-from-s     simulation.*
+//   --statistics-from-s, --settle-samples   simulation.*
 //
 // Overrides are applied to the plain ScenarioConfig before validation; when validation then
 // rejects a field that a flag set, the message names the flag as well.
@@ -36,6 +36,7 @@ struct ScenarioOverrides {
   std::optional<double> duration_s, delay_s, sample_rate_hz, noise_deg, lock_threshold_deg,
       statistics_from_s;
   std::optional<uint64_t> seed;
+  std::optional<int64_t> settle_samples;
 
   /// Registers the flags on `app`.
   void AddTo(CLI::App& app);

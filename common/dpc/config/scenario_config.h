@@ -135,9 +135,11 @@ struct SimulationConfig {
   uint64_t seed = 1;
   /// Lock: the error stays below this (degrees) from the lock time to the end.
   double lock_threshold_deg = 10.0;
-  /// Error statistics start here (seconds); unset: at the first lock after activation (or at
-  /// activation if the run never locks).
+  /// Error statistics start here (seconds); unset: settle_samples after the first lock after
+  /// activation (the run's first sample below lock_threshold_deg), so that the lock-in transient
+  /// does not count as tracking error. A run that never locks has no error statistics.
   std::optional<double> statistics_start_s;
+  int64_t settle_samples = 1000;
 };
 
 /// scenario.proto Scenario.

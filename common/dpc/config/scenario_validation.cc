@@ -466,6 +466,12 @@ void ValidateSimulation(const SimulationConfig& sim) {
                                 "degrees (typical 10)",
                                 sim.lock_threshold_deg));
   }
+  if (sim.settle_samples < 0 || sim.settle_samples > TotalSamples(sim)) {
+    Fail("simulation.settle_samples",
+         fmt::format("{} is outside [0, {}] (the run's samples); the lock-in transient left out "
+                     "of the error statistics is a number of samples",
+                     sim.settle_samples, TotalSamples(sim)));
+  }
   if (sim.statistics_start_s) {
     const std::string start_path = "simulation.statistics_start_s";
     RequireNonNegative(*sim.statistics_start_s, start_path,

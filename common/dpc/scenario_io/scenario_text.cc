@@ -286,6 +286,7 @@ SimulationConfig SimulationFromProto(const scenario::Simulation& p) {
   if (p.has_seed()) s.seed = p.seed();
   if (p.has_lock_threshold_deg()) s.lock_threshold_deg = p.lock_threshold_deg();
   if (p.has_statistics_start_s()) s.statistics_start_s = p.statistics_start_s();
+  if (p.has_settle_samples()) s.settle_samples = p.settle_samples();
   return s;
 }
 
@@ -449,6 +450,7 @@ void SimulationToProto(const SimulationConfig& s, scenario::Simulation* p) {
   p->set_seed(s.seed);
   p->set_lock_threshold_deg(s.lock_threshold_deg);
   if (s.statistics_start_s) p->set_statistics_start_s(*s.statistics_start_s);
+  p->set_settle_samples(s.settle_samples);
 }
 
 // ---------------------------------------------------------------------------------------------

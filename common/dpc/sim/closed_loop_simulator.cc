@@ -51,7 +51,9 @@ SimulationResult ClosedLoopSimulator::Run(SimulationObserver* observer, int64_t 
       law_factory_(law_config_, chain.control_count(), target.is_point());
   ControlIntegrator integrator(chain, initial_phi_);
   RunStatistics statistics(target, chain.control_count(), scenario_.controller.activation_s,
-                           sim.lock_threshold_deg, sim.statistics_start_s);
+                           sim.lock_threshold_deg, sim.statistics_start_s,
+                           // A hair under settle·dt, so the window opens on that very sample.
+                           (static_cast<double>(sim.settle_samples) - 0.5) * dt_s);
 
   // The delay line: slot k mod D holds the command issued at sample k − D, as a pose.
   const int64_t delay = delay_samples_;

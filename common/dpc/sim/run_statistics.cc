@@ -25,12 +25,14 @@ inline void CompensatedAdd(double value, double* sum, double* compensation) {
 }  // namespace
 
 RunStatistics::RunStatistics(const Target& target, int control_count, double activation_s,
-                             double lock_threshold_deg, std::optional<double> statistics_start_s)
+                             double lock_threshold_deg, std::optional<double> statistics_start_s,
+                             double settle_s)
     : target_(target),
       control_count_(control_count),
       activation_s_(activation_s),
       lock_threshold_rad_(lock_threshold_deg / kRadToDeg),
       fixed_start_s_(statistics_start_s),
+      settle_s_(settle_s),
       pending_phi_(static_cast<size_t>(kBatch) * static_cast<size_t>(control_count)),
       error_deg_(1e-12, 360.0),
       sigma_min_squared_(1e-30, 1e12) {
@@ -102,7 +104,8 @@ void RunStatistics::Flush() const {
     }
     below_ = below;
     if (!window_open_) {
-      window_open_ = fixed_start_s_ ? t_s >= *fixed_start_s_ : first_lock_s_.has_value();
+      window_open_ = fixed_start_s_ ? t_s >= *fixed_start_s_
+                                    : first_lock_s_.has_value() && t_s >= *first_lock_s_ + settle_s_;
       if (window_open_) window_start_s_ = t_s;
     }
     if (window_open_) {

@@ -3,7 +3,8 @@
 // logarithmic histograms (log_histogram.h) for percentiles, compensated sums for means.
 //
 //   error        angular distance of the true S_out to the target, degrees; over the
-//                statistics window (from the first lock after activation, or a given start)
+//                statistics window (from a settling time after the first lock after
+//                activation, or from a given start)
 //   extinction   leak through a polarizer aligned with the (nearest) target point,
 //                L = sin²(α/2) = (1 − S_out·S*)/2 for a point target:
 //                  extinction_db_mean        mean over samples of 10·log10(L) (L floored at 1e-20)
@@ -59,10 +60,11 @@ class RunStatistics {
   /// each sample's dependency chain.
   static constexpr int kBatch = 256;
 
-  /// `statistics_start_s`: fixed window start, or nullopt for "from the first lock". Keeps a
-  /// reference to `target`.
+  /// `statistics_start_s`: fixed window start, or nullopt for "settle_s after the first lock".
+  /// Keeps a reference to `target`.
   RunStatistics(const Target& target, int control_count, double activation_s,
-                double lock_threshold_deg, std::optional<double> statistics_start_s);
+                double lock_threshold_deg, std::optional<double> statistics_start_s,
+                double settle_s = 0.0);
 
   /// Real-time. One sample at time t_s from activation on: the true S_out and the applied
   /// controls. Samples must come in time order.
@@ -85,6 +87,7 @@ class RunStatistics {
   double activation_s_;
   double lock_threshold_rad_;
   std::optional<double> fixed_start_s_;
+  double settle_s_;
 
   // Buffered samples (mutable: Summarize flushes them).
   mutable int pending_ = 0;

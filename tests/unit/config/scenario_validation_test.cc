@@ -512,6 +512,11 @@ TEST_F(ScenarioValidationTest, LockThresholdIsInTheHalfOpenInterval) {
 }
 
 TEST_F(ScenarioValidationTest, StatisticsStartIsWithinTheRun) {
+  scenario_.simulation.settle_samples = -1;
+  EXPECT_EQ(ErrorLocation(), "simulation.settle_samples");
+  scenario_.simulation.settle_samples = TotalSamples(scenario_.simulation) + 1;
+  EXPECT_EQ(ErrorLocation(), "simulation.settle_samples");
+  scenario_.simulation.settle_samples = 1000;
   scenario_.simulation.statistics_start_s = -1e-3;
   EXPECT_EQ(ErrorLocation(), "simulation.statistics_start_s");
   scenario_.simulation.statistics_start_s = scenario_.simulation.duration_s;

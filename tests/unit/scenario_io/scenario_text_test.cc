@@ -232,6 +232,7 @@ void ExpectSameScenario(const ScenarioConfig& a, const ScenarioConfig& b) {
   EXPECT_EQ(s.seed, t.seed);
   EXPECT_EQ(s.lock_threshold_deg, t.lock_threshold_deg);
   EXPECT_EQ(s.statistics_start_s, t.statistics_start_s);
+  EXPECT_EQ(s.settle_samples, t.settle_samples);
 }
 
 // ---------------------------------------------------------------------------------------------

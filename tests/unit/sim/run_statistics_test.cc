@@ -46,6 +46,17 @@ TEST(RunStatisticsTest, LockTimeIsTheStartOfTheFinalStretchBelowThreshold) {
   EXPECT_NEAR(s.error_deg.max, 30.0, 1e-9);
 }
 
+TEST(RunStatisticsTest, SettlingTimeLeavesTheLockInTransientOut) {
+  RunStatistics stats(kTarget, 2, 0.0, 10.0, std::nullopt, 0.25);
+  const double errors_deg[] = {50, 9, 6, 3, 1, 1, 1};  // first lock at t = 0.1
+  for (int k = 0; k < 7; ++k) stats.AddSample(0.1 * k, At(errors_deg[k] * kDeg), Phi(0, 0));
+  const RunSummary s = stats.Summarize(7, 0);
+  EXPECT_NEAR(s.statistics_start_s, 0.4, 1e-12);  // 0.1 + 0.25, on the next sample
+  EXPECT_EQ(s.statistics_samples, 3);
+  EXPECT_NEAR(s.error_deg.max, 1.0, 1e-9);
+  EXPECT_NEAR(*s.first_lock_time_s, 0.1, 1e-12);
+}
+
 TEST(RunStatisticsTest, NoLockWhenTheRunEndsAboveThreshold) {
   RunStatistics stats(kTarget, 2, 0.0, 10.0, std::nullopt);
   stats.AddSample(0.0, At(5 * kDeg), Phi(0, 0));
