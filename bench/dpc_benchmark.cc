@@ -183,14 +183,21 @@ void BM_ComputePose(benchmark::State& state) {
   }
 }
 
-// The paper scenario in the simulator; reports samples per second.
+// The paper scenario in the simulator; reports samples per second. Variant 0: as `dpc sim` runs
+// it (the fast path); 1: the SVD baseline law (general loop); 2: the built-in law through the
+// general loop (a user-supplied factory keeps the simulator off the fast path).
 void BM_Simulator(benchmark::State& state) {
   const int stages = static_cast<int>(state.range(0));
-  const bool svd = state.range(1) != 0;
+  const int64_t variant = state.range(1);
   ScenarioConfig scenario = PaperScenario(Axes(stages));
   scenario.simulation.duration_s = 0.02;  // 1e6 samples at 50 MHz
   scenario.controller.activation_s = 0.0;
-  ClosedLoopSimulator simulator(scenario, svd ? ControlLawFactory(MakeSvdBaseline) : nullptr);
+  ControlLawFactory factory = nullptr;
+  if (variant == 1) factory = MakeSvdBaseline;
+  if (variant == 2) {
+    factory = [](const ControlLawConfig& c, int n, bool point) { return MakeControlLaw(c, n, point); };
+  }
+  ClosedLoopSimulator simulator(scenario, factory);
   int64_t samples = 0;
   for (auto _ : state) {
     const SimulationResult r = simulator.Run();
@@ -240,6 +247,10 @@ void RegisterAll() {
   benchmark::RegisterBenchmark("Simulator/gp-svd-baseline", BM_Simulator)
       ->Args({3, 1})
       ->Args({4, 1})
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("Simulator/gp-general-loop", BM_Simulator)
+      ->Args({3, 2})
+      ->Args({4, 2})
       ->Unit(benchmark::kMillisecond);
 }
 
@@ -304,23 +315,30 @@ void PrintSummary(const std::map<std::string, CollectingReporter::Entry>& e) {
   fmt::print("\n{:<22} {:>7} {:>18} {:>22} {:>8}\n", "simulator", "stages", "M samples/s",
              "svd-baseline M samples/s", "ratio");
   for (int stages : {3, 4}) {
-    const auto* x = find(fmt::format("Simulator/gp/{}/0", stages));
     const auto* base = find(fmt::format("Simulator/gp-svd-baseline/{}/1", stages));
-    if (!x || !base) continue;
-    fmt::print("{:<22} {:>7} {:>18.2f} {:>22.2f} {:>7.1f}x\n", "paper scenario, gp", stages,
-               x->samples_per_s / 1e6, base->samples_per_s / 1e6,
-               x->samples_per_s / base->samples_per_s);
+    for (const auto& [name, label] :
+         {std::pair{"Simulator/gp/{}/0", "paper scenario, gp"},
+          std::pair{"Simulator/gp-general-loop/{}/2", "  (general loop)"}}) {
+      const auto* x = find(fmt::format(fmt::runtime(name), stages));
+      if (!x || !base) continue;
+      fmt::print("{:<22} {:>7} {:>18.2f} {:>22.2f} {:>7.1f}x\n", label, stages,
+                 x->samples_per_s / 1e6, base->samples_per_s / 1e6,
+                 x->samples_per_s / base->samples_per_s);
+    }
   }
   const auto* gp4 = find("Law/gp/4/0");
-  const auto* sim4 = find("Simulator/gp/4/0");
-  fmt::print("\nGoals: 4-stage gp update <= 100 ns (aim 20 ns): {}; simulator >= 10 M samples/s "
-             "(aim 50 M): {}\n",
+  const auto sim_goal = [&](int stages) {
+    const auto* sim = find(fmt::format("Simulator/gp/{}/0", stages));
+    return sim ? fmt::format("{} stages {:.2f} M samples/s {}", stages, sim->samples_per_s / 1e6,
+                             sim->samples_per_s >= 1e7 ? "MET" : "MISSED")
+               : fmt::format("{} stages not run", stages);
+  };
+  fmt::print("\nGoals: 4-stage gp update <= 100 ns (aim 20 ns): {}\n",
              gp4 ? fmt::format("{:.1f} ns {}", gp4->ns_per_iteration,
                                gp4->ns_per_iteration <= 100 ? "MET" : "MISSED")
-                 : "not run",
-             sim4 ? fmt::format("{:.2f} M samples/s {}", sim4->samples_per_s / 1e6,
-                                sim4->samples_per_s >= 1e7 ? "MET" : "MISSED")
-                  : "not run");
+                 : "not run");
+  fmt::print("       paper simulation >= 10 M samples/s on one core (aim 50 M): {}; {}\n",
+             sim_goal(3), sim_goal(4));
 }
 
 }  // namespace

@@ -65,6 +65,7 @@ nlohmann::ordered_json RunSettingsJson(const ClosedLoopSimulator& simulator) {
   j["activation_s"] = s.controller.activation_s;
   j["polarimeter_noise_deg"] = s.simulation.polarimeter_noise_deg;
   j["seed"] = s.simulation.seed;
+  j["loop_kernel"] = simulator.uses_fast_path() ? "fast" : "general";
   return j;
 }
 
@@ -100,7 +101,7 @@ nlohmann::ordered_json RunReportJson(const ClosedLoopSimulator& simulator,
   j["rank_deficient_updates"] = r.rank_deficient_updates;
   j["clamped_updates"] = r.clamped_updates;
   j["sigma_min_min"] = Number(r.sigma_min_min);
-  j["sigma_min_p1"] = Number(r.sigma_min_p1);
+  j["near_singular_fraction"] = Number(r.near_singular_fraction);
   nlohmann::ordered_json final_phi = nlohmann::ordered_json::array();
   for (int i = 0; i < result.final_phi.size(); ++i) final_phi.push_back(Number(result.final_phi[i]));
   j["final_phi"] = final_phi;
@@ -127,8 +128,9 @@ std::string RunReportText(const ClosedLoopSimulator& simulator, const Simulation
                       "{}\n",
                       r.samples, s.simulation.sample_rate_hz / 1e6, simulator.delay_samples(),
                       s.controller.activation_s * 1e3, result.stopped_early ? " (stopped early)" : "");
-  text += fmt::format("speed      {:.3g} M samples/s ({:.3g} s)\n", result.samples_per_s / 1e6,
-                      result.wall_time_s);
+  text += fmt::format("speed      {:.3g} M samples/s ({:.3g} s, {} loop)\n",
+                      result.samples_per_s / 1e6, result.wall_time_s,
+                      simulator.uses_fast_path() ? "fast" : "general");
   text += fmt::format("lock       {} (first below {:g}° after {}, {} excursions)\n",
                       FormatOptional(r.lock_time_s, 1e3, "ms after activation"),
                       s.simulation.lock_threshold_deg, FormatOptional(r.first_lock_time_s, 1e3, "ms"),
@@ -144,9 +146,11 @@ std::string RunReportText(const ClosedLoopSimulator& simulator, const Simulation
                       FormatList(r.phi_min), FormatList(r.phi_max), FormatList(r.phi_p1),
                       FormatList(r.phi_p99));
   text += fmt::format("controller null-space active {:.1f}% of updates, {} failed, {} rank-deficient, "
-                      "{} clamped, {} resets, smallest sigma_min {:.3g}\n",
+                      "{} clamped, {} resets, smallest sigma_min {:.3g} ({:.2f}% of updates "
+                      "below 0.1 sigma_max)\n",
                       100.0 * r.nullspace_active_fraction, r.failed_updates,
-                      r.rank_deficient_updates, r.clamped_updates, r.resets, r.sigma_min_min);
+                      r.rank_deficient_updates, r.clamped_updates, r.resets, r.sigma_min_min,
+                      100.0 * r.near_singular_fraction);
   return text;
 }
 

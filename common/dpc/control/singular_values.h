@@ -63,6 +63,30 @@ class SingularValues {
     }
     return 0.0;
   }
+  /// A lower bound of σ_min² with one division (λ2 = det/λ1 ≥ det/tr since λ1 ≤ tr): callers
+  /// looking for a minimum need min_squared() only when this bound is below it.
+  double min_squared_lower_bound() const {
+    switch (kind_) {
+      case Kind::kGram2: return a_ + b_ > 0.0 ? d_ / (a_ + b_) : 0.0;
+      case Kind::kGram1: return a_;
+      case Kind::kExact: return b_ * b_;
+    }
+    return 0.0;
+  }
+  /// Whether σ_min < ratio·σ_max (0 < ratio ≤ 1), decided exactly without roots: with
+  /// q = ratio², λ2/λ1 < q ⇔ det/tr² < q/(1 + q)² (x/(1 + x)² increases on [0, 1]).
+  bool IsBelowRatio(double ratio) const {
+    const double q = ratio * ratio;
+    switch (kind_) {
+      case Kind::kGram2: {
+        const double trace = a_ + b_;
+        return d_ * (1.0 + q) * (1.0 + q) < q * trace * trace;
+      }
+      case Kind::kGram1: return false;  // one singular value
+      case Kind::kExact: return b_ < ratio * a_;
+    }
+    return false;
+  }
 
  private:
   enum class Kind { kExact, kGram1, kGram2 };

@@ -34,14 +34,6 @@ double SphereAngleRad(const StokesVector& a, const StokesVector& b) {
   return M_PI - 2.0 * std::asin(std::min(1.0, 0.5 * (a + b).norm()));
 }
 
-void TangentBasis(const StokesVector& s, Vector3* e1, Vector3* e2) {
-  const double sign = std::copysign(1.0, s.z());
-  const double a = -1.0 / (sign + s.z());
-  const double b = s.x() * s.y() * a;
-  *e1 = Vector3(1.0 + sign * s.x() * s.x() * a, sign * b, -sign * s.x());
-  *e2 = Vector3(b, sign + s.y() * s.y() * a, -s.y());
-}
-
 std::string FormatStokes(const StokesVector& s) {
   return fmt::format("[{:.6g}, {:.6g}, {:.6g}]", s.x(), s.y(), s.z());
 }

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>  // cross products
+#include <cmath>
 #include <string>
 
 namespace dpc {
@@ -52,8 +53,14 @@ inline double PolarizerLeak(const StokesVector& s, const StokesVector& target) {
 inline void RenormalizeNearUnit(StokesVector* s) { *s *= 0.5 * (3.0 - s->squaredNorm()); }
 
 /// A right-handed orthonormal basis (e1, e2) of the tangent plane at unit `s`:
-/// e1 × e2 = s. Branch-free, no square root (Duff et al., JCGT 6(1), 2017).
-void TangentBasis(const StokesVector& s, Vector3* e1, Vector3* e2);
+/// e1 × e2 = s. Branch-free, no square root (Duff et al., JCGT 6(1), 2017). Real-time.
+inline void TangentBasis(const StokesVector& s, Vector3* e1, Vector3* e2) {
+  const double sign = std::copysign(1.0, s.z());
+  const double a = -1.0 / (sign + s.z());
+  const double b = s.x() * s.y() * a;
+  *e1 = Vector3(1.0 + sign * s.x() * s.x() * a, sign * b, -sign * s.x());
+  *e2 = Vector3(b, sign + s.y() * s.y() * a, -s.y());
+}
 
 /// "[0.000, 0.600, 0.800]".
 std::string FormatStokes(const StokesVector& s);

@@ -11,15 +11,13 @@ namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 
-// Seeds of the two polarimeters' noise streams, distinct from the input's.
-constexpr uint64_t kInputPolarimeterStream = 2;
-constexpr uint64_t kOutputPolarimeterStream = 3;
-
 }  // namespace
 
 ClosedLoopSimulator::ClosedLoopSimulator(const ScenarioConfig& scenario,
                                          ControlLawFactory law_factory)
-    : scenario_(scenario), law_factory_(law_factory ? std::move(law_factory) : MakeControlLaw) {
+    : scenario_(scenario),
+      custom_law_(static_cast<bool>(law_factory)),
+      law_factory_(law_factory ? std::move(law_factory) : MakeControlLaw) {
   ValidateScenario(scenario_);
   chain_ = std::make_unique<WaveplateChain>(BuildChain(scenario_.stages));
   target_ = std::make_unique<Target>(BuildTarget(scenario_.target));
@@ -31,16 +29,59 @@ ClosedLoopSimulator::ClosedLoopSimulator(const ScenarioConfig& scenario,
   activation_sample_ = static_cast<int64_t>(std::ceil(activation - 1e-9 * std::max(1.0, activation)));
   // Fail here, not in Run, if the law does not fit the device.
   law_factory_(law_config_, chain_->control_count(), target_->is_point());
+  fast_path_ = PlanFastPath(scenario_, *chain_, custom_law_);
+}
+
+std::optional<ClosedLoopSimulator::FastPathPlan> ClosedLoopSimulator::PlanFastPath(
+    const ScenarioConfig& scenario, const WaveplateChain& chain, bool custom_law) {
+  const ControllerConfig& c = scenario.controller;
+  const bool law_fits = c.method == ControlMethod::kGradientProjection ||
+                        c.method == ControlMethod::kThresholdedGradientProjection ||
+                        c.method == ControlMethod::kPseudoInverse;
+  const int stages = chain.stage_count();
+  if (custom_law || !law_fits || scenario.target.kind != TargetConfig::Kind::kPoint ||
+      (stages != 3 && stages != 4) || chain.control_count() != stages || chain.has_ranges()) {
+    return std::nullopt;
+  }
+  FastPathPlan plan;
+  plan.stages = stages;
+  for (int i = 0; i < stages; ++i) {
+    const WaveplateStage& stage = chain.stages()[i];
+    const ControlMap& map = stage.controls()[0].map;
+    if (stage.kind() != WaveplateStage::Kind::kFixedAxis ||
+        ClassifyAxis(stage.axis()) == ElementalAxis::kGeneral ||
+        map.kind() != ControlMap::Kind::kLinear) {
+      return std::nullopt;
+    }
+    plan.axis[i] = ClassifyAxis(stage.axis());
+    plan.rad_per_unit[i] = map.linear_rad_per_unit();
+    plan.offset_rad[i] = map.AngleRad(0.0);
+  }
+  plan.step = c.step;
+  plan.pseudo_inverse_only = c.method == ControlMethod::kPseudoInverse;
+  plan.nullspace_step = plan.pseudo_inverse_only ? 0.0 : c.nullspace_step;
+  if (c.method == ControlMethod::kThresholdedGradientProjection) plan.threshold = c.threshold;
+  plan.singular_value_tolerance = c.singular_value_tolerance;
+  return plan;
+}
+
+SimulationResult ClosedLoopSimulator::Run(SimulationObserver* observer, int64_t decimation) {
+  if (decimation < 1) decimation = 1;
+  if (fast_path_) {
+    return fast_path_->stages == 3 ? RunFastPath<3>(observer, decimation)
+                                   : RunFastPath<4>(observer, decimation);
+  }
+  return RunGeneral(observer, decimation);
 }
 
 ClosedLoopSimulator::~ClosedLoopSimulator() = default;
 
-SimulationResult ClosedLoopSimulator::Run(SimulationObserver* observer, int64_t decimation) {
+SimulationResult ClosedLoopSimulator::RunGeneral(SimulationObserver* observer,
+                                                 int64_t decimation) {
   const SimulationConfig& sim = scenario_.simulation;
   const double dt_s = 1.0 / sim.sample_rate_hz;
   const WaveplateChain& chain = *chain_;
   const Target& target = *target_;
-  if (decimation < 1) decimation = 1;
 
   InputSopGenerator input = MakeInputSopGenerator(scenario_.input, sim.seed, sim.sample_rate_hz);
   PolarimeterNoise input_polarimeter(sim.polarimeter_noise_deg, sim.seed,

@@ -16,11 +16,20 @@
 // issues it, and kept in the delay line, so the plant reuses it D samples later. The delay line
 // holds D poses and the statistics are fixed-size histograms: memory does not grow with the
 // run length. Nothing in the per-sample loop allocates.
+//
+// Two loops, the same results: the general loop runs any device, law (including a user's) and
+// target through ControlProblem / ControlLaw; the fast path, selected automatically for the
+// paper's class of configurations (3 or 4 fixed-axis stages on S1/S2/S3 with linear maps and no
+// ranges, a point target, gp / gpt / pinv, either loop mode, any input and noise), fuses
+// kinematics, task, law and integration into one fixed-size loop body
+// (closed_loop_simulator_fast_path.cc). Its trajectories equal the general loop's to round-off
+// (tests/unit/sim/closed_loop_simulator_fast_path_test.cc).
 
 #include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "dpc/config/scenario_config.h"
@@ -78,6 +87,9 @@ class ClosedLoopSimulator {
   static constexpr int64_t kProgressInterval = int64_t{1} << 20;
   /// The most samples processed per phase (see Run).
   static constexpr int64_t kMaxBlock = 64;
+  /// Random streams of the two polarimeters' noise (the input uses stream 1).
+  static constexpr uint64_t kInputPolarimeterStream = 2;
+  static constexpr uint64_t kOutputPolarimeterStream = 3;
 
   /// Validates the scenario (ValidateScenario: throws ScenarioError naming the bad field) and
   /// builds the device, target, law, input and polarimeters.
@@ -94,11 +106,31 @@ class ClosedLoopSimulator {
   const WaveplateChain& chain() const { return *chain_; }
   const Target& target() const { return *target_; }
   int64_t delay_samples() const { return delay_samples_; }
+  /// Whether Run uses the fused fast path (see the file comment).
+  bool uses_fast_path() const { return fast_path_.has_value(); }
   int64_t total_samples() const { return total_samples_; }
   int64_t activation_sample() const { return activation_sample_; }
 
  private:
+  /// What the fast path needs to know, fixed at construction.
+  struct FastPathPlan {
+    int stages = 0;
+    ElementalAxis axis[4] = {};
+    double rad_per_unit[4] = {}, offset_rad[4] = {};
+    double step = 0.0, nullspace_step = 0.0;
+    std::optional<double> threshold;
+    bool pseudo_inverse_only = false;  ///< pinv: no null-space term
+    double singular_value_tolerance = 1e-12;
+  };
+  /// The plan if the scenario is in the fast path's class, else nullopt.
+  static std::optional<FastPathPlan> PlanFastPath(const ScenarioConfig& scenario,
+                                                  const WaveplateChain& chain, bool custom_law);
+  SimulationResult RunGeneral(SimulationObserver* observer, int64_t decimation);
+  template <int kStages>
+  SimulationResult RunFastPath(SimulationObserver* observer, int64_t decimation);
+
   ScenarioConfig scenario_;
+  bool custom_law_;
   std::unique_ptr<WaveplateChain> chain_;
   std::unique_ptr<Target> target_;
   ControlLawConfig law_config_;
@@ -107,6 +139,7 @@ class ClosedLoopSimulator {
   int64_t delay_samples_ = 1;
   int64_t total_samples_ = 0;
   int64_t activation_sample_ = 0;
+  std::optional<FastPathPlan> fast_path_;
 };
 
 }  // namespace dpc

@@ -28,58 +28,39 @@ RunStatistics::RunStatistics(const Target& target, int control_count, double act
                              double lock_threshold_deg, std::optional<double> statistics_start_s,
                              double settle_s)
     : target_(target),
+      point_target_(target.is_point()),
+      target_x_(target.point()[0]),
+      target_y_(target.point()[1]),
+      target_z_(target.point()[2]),
       control_count_(control_count),
       activation_s_(activation_s),
       lock_threshold_rad_(lock_threshold_deg / kRadToDeg),
       fixed_start_s_(statistics_start_s),
       settle_s_(settle_s),
       pending_phi_(static_cast<size_t>(kBatch) * static_cast<size_t>(control_count)),
-      error_deg_(1e-12, 360.0),
-      sigma_min_squared_(1e-30, 1e12) {
+      error_deg_(1e-12, 360.0) {
   phi_.reserve(control_count);
   for (int c = 0; c < control_count; ++c) phi_.emplace_back(1e-12, 1e12);
 }
 
-void RunStatistics::AddSample(double t_s, const StokesVector& s_out,
-                              const ControlVector& phi_applied) {
-  const int i = pending_;
-  pending_t_s_[i] = t_s;
-  pending_s_out_[i][0] = s_out[0];
-  pending_s_out_[i][1] = s_out[1];
-  pending_s_out_[i][2] = s_out[2];
-  double* phi = pending_phi_.data() + static_cast<size_t>(i) * control_count_;
-  DispatchCount(control_count_, [&](auto fixed) {
-    const int count = FixedOr(fixed, control_count_);
-    for (int c = 0; c < count; ++c) phi[c] = phi_applied[c];
-  });
-  if (++pending_ == kBatch) Flush();
-}
-
 void RunStatistics::Flush() const {
-  double sigma_min_squared[kBatch];
-  for (int i = 0; i < pending_updates_; ++i) {
-    sigma_min_squared[i] = pending_singular_values_[i].min_squared();
-  }
-  sigma_min_squared_.AddBatch(sigma_min_squared, pending_updates_);
-  pending_updates_ = 0;
   const int count = pending_;
   if (count == 0) return;
   pending_ = 0;
   // Independent per sample: the expensive part, pipelined across the batch.
   double error_rad[kBatch], leak[kBatch];
-  if (target_.is_point()) {
-    // Target::DistanceAndLeak inlined for the common case: the chord |S − S*| = 2 sin(α/2).
-    const double tx = target_.point()[0], ty = target_.point()[1], tz = target_.point()[2];
+  if (point_target_) {
+    // Target::DistanceAndLeak from the chord c = |S − S*| = 2 sin(α/2); past 90° from the
+    // supplementary chord |S + S*|² = 4 − c² (unit vectors), within ~1e-10 rad even near 180°.
     for (int i = 0; i < count; ++i) {
-      const double dx = pending_s_out_[i][0] - tx, dy = pending_s_out_[i][1] - ty,
-                   dz = pending_s_out_[i][2] - tz;
-      const double chord_squared = dx * dx + dy * dy + dz * dz;
+      const double chord_squared = pending_chord_squared_[i];
       if (chord_squared <= 2.0) {
         leak[i] = 0.25 * chord_squared;
-        error_rad[i] = 2.0 * std::asin(std::min(1.0, 0.5 * std::sqrt(chord_squared)));
+        error_rad[i] = 2.0 * std::asin(0.5 * std::sqrt(chord_squared));
       } else {
-        const StokesVector s_out(pending_s_out_[i][0], pending_s_out_[i][1], pending_s_out_[i][2]);
-        target_.DistanceAndLeak(s_out, &error_rad[i], &leak[i]);
+        const double supplementary_squared = std::max(0.0, 4.0 - chord_squared);
+        leak[i] = std::min(1.0, 0.25 * chord_squared);
+        error_rad[i] = M_PI - 2.0 * std::asin(0.5 * std::sqrt(supplementary_squared));
       }
     }
   } else {
@@ -124,17 +105,6 @@ void RunStatistics::Flush() const {
   }
 }
 
-void RunStatistics::AddUpdate(bool nullspace_active, bool failed, bool rank_deficient,
-                              bool clamped, const SingularValues& singular_values) {
-  ++updates_;
-  nullspace_active_ += nullspace_active;
-  failed_ += failed;
-  rank_deficient_ += rank_deficient;
-  clamped_ += clamped;
-  pending_singular_values_[pending_updates_] = singular_values;
-  if (++pending_updates_ == kBatch) Flush();
-}
-
 RunSummary RunStatistics::Summarize(int64_t samples, int64_t resets) const {
   Flush();
   RunSummary s;
@@ -169,10 +139,9 @@ RunSummary RunStatistics::Summarize(int64_t samples, int64_t resets) const {
   s.rank_deficient_updates = rank_deficient_;
   s.clamped_updates = clamped_;
   s.resets = resets;
-  // σ² was recorded (one square root fewer per update); the square root is monotonic.
-  const bool have_sigma = sigma_min_squared_.count() > 0;
-  s.sigma_min_min = have_sigma ? std::sqrt(sigma_min_squared_.min()) : NAN;
-  s.sigma_min_p1 = have_sigma ? std::sqrt(sigma_min_squared_.Percentile(1.0)) : NAN;
+  s.sigma_min_min = updates_ ? std::sqrt(min_sigma_squared_) : NAN;
+  s.near_singular_fraction =
+      updates_ ? static_cast<double>(near_singular_) / static_cast<double>(updates_) : 0.0;
   return s;
 }
 

@@ -15,13 +15,16 @@
 //                excursions: upward crossings of the threshold after the first lock.
 //   controls     min, max, 1st and 99th percentiles of each applied φ_i, from activation on
 //   controller   fraction of updates with the null-space term active, failed and clamped
-//                updates, the smallest σ_min of the task Jacobian
+//                updates, the smallest σ_min of the task Jacobian and the fraction of updates
+//                with σ_min < 0.1·σ_max (near a singularity)
 
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <vector>
 
 #include "dpc/control/singular_values.h"
+#include "dpc/optics/count_dispatch.h"
 #include "dpc/control/target.h"
 #include "dpc/optics/stokes.h"
 #include "dpc/sim/log_histogram.h"
@@ -50,7 +53,8 @@ struct RunSummary {
   int64_t clamped_updates = 0;        ///< clamped into a control range
   int64_t resets = 0;
   double sigma_min_min = 0.0;         ///< smallest σ_min of the task Jacobian seen
-  double sigma_min_p1 = 0.0;
+  /// Fraction of updates near a singularity: σ_min < kNearSingularRatio·σ_max.
+  double near_singular_fraction = 0.0;
 };
 
 class RunStatistics {
@@ -68,10 +72,17 @@ class RunStatistics {
 
   /// Real-time. One sample at time t_s from activation on: the true S_out and the applied
   /// controls. Samples must come in time order.
-  void AddSample(double t_s, const StokesVector& s_out, const ControlVector& phi_applied);
+  void AddSample(double t_s, const StokesVector& s_out, const ControlVector& phi_applied) {
+    AddSample(t_s, s_out, phi_applied.data());
+  }
+  /// The same with the controls as control_count consecutive values.
+  void AddSample(double t_s, const StokesVector& s_out, const double* phi_applied);
 
-  /// Real-time. One controller update's outcome (the singular values are evaluated in
-  /// batches, off the control loop).
+  /// σ_min below this fraction of σ_max counts as near a singularity.
+  static constexpr double kNearSingularRatio = 0.1;
+
+  /// Real-time. One controller update's outcome. The singular values' square roots are taken
+  /// only for a candidate new minimum.
   void AddUpdate(bool nullspace_active, bool failed, bool rank_deficient, bool clamped,
                  const SingularValues& singular_values);
 
@@ -83,6 +94,8 @@ class RunStatistics {
   void Flush() const;
 
   const Target& target_;
+  bool point_target_;
+  double target_x_, target_y_, target_z_;
   int control_count_;
   double activation_s_;
   double lock_threshold_rad_;
@@ -92,7 +105,8 @@ class RunStatistics {
   // Buffered samples (mutable: Summarize flushes them).
   mutable int pending_ = 0;
   mutable double pending_t_s_[kBatch];
-  mutable double pending_s_out_[kBatch][3];
+  mutable double pending_s_out_[kBatch][3];        ///< set targets
+  mutable double pending_chord_squared_[kBatch];   ///< point targets: |S_out − S*|²
   mutable std::vector<double> pending_phi_;  ///< kBatch × control_count, sample-major
 
   // Error window.
@@ -111,9 +125,41 @@ class RunStatistics {
   // Controls and controller.
   mutable std::vector<LogHistogram> phi_;
   int64_t updates_ = 0, nullspace_active_ = 0, failed_ = 0, rank_deficient_ = 0, clamped_ = 0;
-  mutable int pending_updates_ = 0;
-  mutable SingularValues pending_singular_values_[kBatch];
-  mutable LogHistogram sigma_min_squared_;
+  int64_t near_singular_ = 0;
+  double min_sigma_squared_ = INFINITY;
 };
+
+inline void RunStatistics::AddSample(double t_s, const StokesVector& s_out,
+                              const double* phi_applied) {
+  const int i = pending_;
+  pending_t_s_[i] = t_s;
+  if (point_target_) {
+    const double dx = s_out[0] - target_x_, dy = s_out[1] - target_y_, dz = s_out[2] - target_z_;
+    pending_chord_squared_[i] = dx * dx + dy * dy + dz * dz;
+  } else {
+    pending_s_out_[i][0] = s_out[0];
+    pending_s_out_[i][1] = s_out[1];
+    pending_s_out_[i][2] = s_out[2];
+  }
+  double* phi = pending_phi_.data() + static_cast<size_t>(i) * control_count_;
+  DispatchCount(control_count_, [&](auto fixed) {
+    const int count = FixedOr(fixed, control_count_);
+    for (int c = 0; c < count; ++c) phi[c] = phi_applied[c];
+  });
+  if (++pending_ == kBatch) Flush();
+}
+
+inline void RunStatistics::AddUpdate(bool nullspace_active, bool failed, bool rank_deficient,
+                              bool clamped, const SingularValues& singular_values) {
+  ++updates_;
+  nullspace_active_ += nullspace_active;
+  failed_ += failed;
+  rank_deficient_ += rank_deficient;
+  clamped_ += clamped;
+  if (singular_values.min_squared_lower_bound() < min_sigma_squared_) {
+    min_sigma_squared_ = std::min(min_sigma_squared_, singular_values.min_squared());
+  }
+  near_singular_ += singular_values.IsBelowRatio(kNearSingularRatio);
+}
 
 }  // namespace dpc

@@ -27,6 +27,27 @@ TEST(SingularValuesTest, FromTheGramMatrixOfATwoRowMatrix) {
   }
 }
 
+TEST(SingularValuesTest, LowerBoundAndNearSingularTestAgreeWithTheValues) {
+  std::mt19937_64 rng(12);
+  std::normal_distribution<double> normal;
+  for (int trial = 0; trial < 2000; ++trial) {
+    Eigen::Matrix<double, 2, 4> a;
+    for (int i = 0; i < 2; ++i)
+      for (int j = 0; j < 4; ++j) a(i, j) = normal(rng);
+    a.row(1) += (trial % 7) * a.row(0);  // some nearly parallel rows
+    const Eigen::Matrix2d g = a * a.transpose();
+    const SingularValues s = SingularValues::FromGram(g(0, 0), g(1, 1), g(0, 1), g.determinant());
+    EXPECT_LE(s.min_squared_lower_bound(), s.min_squared() * (1 + 1e-12));
+    EXPECT_GE(2.0 * s.min_squared_lower_bound(), s.min_squared() * (1 - 1e-12));
+    for (double ratio : {0.05, 0.1, 0.5}) {
+      const double actual = s.min() / s.max();
+      if (std::abs(actual - ratio) > 1e-9) EXPECT_EQ(s.IsBelowRatio(ratio), actual < ratio);
+    }
+  }
+  EXPECT_TRUE(SingularValues::Exact(1.0, 0.05).IsBelowRatio(0.1));
+  EXPECT_FALSE(SingularValues::FromGram(4.0).IsBelowRatio(0.1));
+}
+
 TEST(SingularValuesTest, OneRowAndExactValues) {
   EXPECT_DOUBLE_EQ(SingularValues::FromGram(9.0).max(), 3.0);
   EXPECT_DOUBLE_EQ(SingularValues::FromGram(9.0).min(), 3.0);

@@ -132,6 +132,7 @@ TEST(RunStatisticsTest, UpdateCounters) {
   RunStatistics stats(kTarget, 2, 0.0, 10.0, std::nullopt);
   stats.AddUpdate(true, false, false, false, SingularValues::Exact(1.0, 0.5));
   stats.AddUpdate(false, true, false, false, SingularValues::FromGram(0.01));
+  // G = diag(4, 1e-4): σ = 2 and 0.01, below 0.1·σ_max.
   stats.AddUpdate(true, false, true, true, SingularValues::FromGram(4.0, 1e-4, 0.0, 4e-4));
   const RunSummary s = stats.Summarize(3, 7);
   EXPECT_EQ(s.updates, 3);
@@ -141,6 +142,7 @@ TEST(RunStatisticsTest, UpdateCounters) {
   EXPECT_EQ(s.clamped_updates, 1);
   EXPECT_EQ(s.resets, 7);
   EXPECT_NEAR(s.sigma_min_min, 0.01, 1e-15);
+  EXPECT_NEAR(s.near_singular_fraction, 1.0 / 3.0, 1e-15);
 }
 
 }  // namespace
