@@ -24,6 +24,9 @@ InputSopGenerator::InputSopGenerator(const StokesVector& initial_sop,
           fmt::format("input SOP generator: disturbance {} is null", i));
     }
   }
+  if (disturbances_.size() == 1) {
+    only_scrambler_ = dynamic_cast<PaperScrambler*>(disturbances_[0].get());
+  }
 }
 
 std::string InputSopGenerator::Describe() const {

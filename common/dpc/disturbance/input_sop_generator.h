@@ -23,6 +23,7 @@
 
 #include "dpc/config/scenario_config.h"
 #include "dpc/disturbance/disturbance.h"
+#include "dpc/disturbance/paper_scrambler.h"
 #include "dpc/disturbance/random_source.h"
 
 namespace dpc {
@@ -47,8 +48,13 @@ class InputSopGenerator {
   const StokesVector& Next() {
     if (next_index_ > 0) {
       const double t_s = static_cast<double>(next_index_ - 1) * sample_period_s_;
-      for (const std::unique_ptr<Disturbance>& disturbance : disturbances_) {
-        disturbance->Advance(t_s, &sop_, random_);
+      if (only_scrambler_ != nullptr) {
+        // The paper's input, called directly (inlined) rather than through the vtable.
+        only_scrambler_->PaperScrambler::Advance(t_s, &sop_, random_);
+      } else {
+        for (const std::unique_ptr<Disturbance>& disturbance : disturbances_) {
+          disturbance->Advance(t_s, &sop_, random_);
+        }
       }
       RenormalizeNearUnit(&sop_);
     }
@@ -74,6 +80,7 @@ class InputSopGenerator {
   double sample_period_s_;
   StokesVector sop_;
   int64_t next_index_ = 0;
+  PaperScrambler* only_scrambler_ = nullptr;  ///< set when it is the only disturbance
 };
 
 /// Not real-time. The generator for `input` (MakeDisturbance for each entry, in order). Throws

@@ -67,6 +67,30 @@ inline void SmallAngleSinCos(double x, double* s, double* c) {
   *c = 1.0 + x2 * (-0.5 + x2 * (1.0 / 24 + x2 * (-1.0 / 720)));
 }
 
+/// The bound below which SmallArcSine is exact to about 1 ulp.
+inline constexpr double kSmallArcSineLimit = 0.18;
+
+/// asin(x) for |x| ≤ kSmallArcSineLimit by its Taylor series Σ (2n)!/(4ⁿ(n!)²(2n+1))·x^(2n+1),
+/// to x²³ (truncation < 0.18²⁵·0.0061 ≈ 1e-21, far below 1 ulp of the result; measured max
+/// relative error 2.2e-16). Branch-free, so a loop over it vectorizes; several times faster than
+/// the library call. For a locked output (errors below ~20°) this is what the statistics hit.
+inline double SmallArcSine(double x) {
+  const double z = x * x;
+  double p = 88179.0 / 12058624.0;
+  p = p * z + 46189.0 / 5505024.0;
+  p = p * z + 12155.0 / 1245184.0;
+  p = p * z + 6435.0 / 557056.0;
+  p = p * z + 143.0 / 10240.0;
+  p = p * z + 231.0 / 13312.0;
+  p = p * z + 63.0 / 2816.0;
+  p = p * z + 35.0 / 1152.0;
+  p = p * z + 5.0 / 112.0;
+  p = p * z + 3.0 / 40.0;
+  p = p * z + 1.0 / 6.0;
+  p = p * z + 1.0;
+  return x * p;
+}
+
 /// sin and cos of an angle; the series for |x| < 2^-7 (what small per-sample steps hit),
 /// several times faster than the library call.
 inline void SinCos(double x, double* s, double* c) {

@@ -7,7 +7,8 @@
 //                activation, or from a given start)
 //   extinction   leak through a polarizer aligned with the (nearest) target point,
 //                L = sin²(α/2) = (1 − S_out·S*)/2 for a point target:
-//                  extinction_db_mean        mean over samples of 10·log10(L) (L floored at 1e-20)
+//                  extinction_db_mean        mean over samples of 10·log10(L) (L floored at 1e-20;
+//                                            Σ ln L through LogSumAccumulator, no log per sample)
 //                  extinction_db_power_mean  10·log10(mean L): what a power meter would read
 //   lock         "locked" from the start of the last stretch that stays below the lock threshold
 //                until the end of the run; lock_time_s counts from activation (unset if the
@@ -28,6 +29,7 @@
 #include "dpc/control/target.h"
 #include "dpc/optics/stokes.h"
 #include "dpc/sim/log_histogram.h"
+#include "dpc/sim/log_sum_accumulator.h"
 
 namespace dpc {
 
@@ -107,13 +109,13 @@ class RunStatistics {
   mutable double pending_t_s_[kBatch];
   mutable double pending_s_out_[kBatch][3];        ///< set targets
   mutable double pending_chord_squared_[kBatch];   ///< point targets: |S_out − S*|²
-  mutable std::vector<double> pending_phi_;  ///< kBatch × control_count, sample-major
+  mutable std::vector<double> pending_phi_;  ///< control_count × kBatch, control-major
 
   // Error window.
   mutable bool window_open_ = false;
   mutable double window_start_s_ = NAN;
   mutable LogHistogram error_deg_;
-  mutable double leak_db_sum_ = 0.0, leak_db_compensation_ = 0.0;
+  mutable LogSumAccumulator leak_log_sum_;  ///< Σ ln(leak), for the mean in dB
   mutable double leak_sum_ = 0.0, leak_compensation_ = 0.0;
 
   // Lock tracking.
@@ -141,10 +143,10 @@ inline void RunStatistics::AddSample(double t_s, const StokesVector& s_out,
     pending_s_out_[i][1] = s_out[1];
     pending_s_out_[i][2] = s_out[2];
   }
-  double* phi = pending_phi_.data() + static_cast<size_t>(i) * control_count_;
+  double* phi = pending_phi_.data() + i;
   DispatchCount(control_count_, [&](auto fixed) {
     const int count = FixedOr(fixed, control_count_);
-    for (int c = 0; c < count; ++c) phi[c] = phi_applied[c];
+    for (int c = 0; c < count; ++c) phi[c * kBatch] = phi_applied[c];
   });
   if (++pending_ == kBatch) Flush();
 }

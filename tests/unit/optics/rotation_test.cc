@@ -95,6 +95,19 @@ TEST_F(RotationTest, SinCosMatchesTheLibraryInsideAndOutsideTheSeriesRange) {
   }
 }
 
+TEST_F(RotationTest, SmallArcSineIsExactToAboutOneUlpUpToItsLimit) {
+  std::uniform_real_distribution<double> x(-kSmallArcSineLimit, kSmallArcSineLimit);
+  double worst = 0.0;
+  for (int i = 0; i < 200000; ++i) {
+    const double v = x(rng_);
+    if (v == 0.0) continue;
+    worst = std::max(worst, std::abs(SmallArcSine(v) - std::asin(v)) / std::abs(std::asin(v)));
+  }
+  EXPECT_LT(worst, 4.5e-16);  // 2 ulp
+  EXPECT_EQ(SmallArcSine(0.0), 0.0);
+  EXPECT_NEAR(SmallArcSine(kSmallArcSineLimit), std::asin(kSmallArcSineLimit), 1e-16);
+}
+
 TEST_F(RotationTest, AxisClassification) {
   EXPECT_EQ(ClassifyAxis(Vector3::UnitX()), ElementalAxis::kS1);
   EXPECT_EQ(ClassifyAxis(Vector3::UnitY()), ElementalAxis::kS2);
