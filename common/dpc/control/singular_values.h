@@ -63,15 +63,16 @@ class SingularValues {
     }
     return 0.0;
   }
-  /// A lower bound of σ_min² with one division (λ2 = det/λ1 ≥ det/tr since λ1 ≤ tr): callers
-  /// looking for a minimum need min_squared() only when this bound is below it.
-  double min_squared_lower_bound() const {
+  /// Whether σ_min² may be below `bound` (no root, no division: λ2 = det/λ1 ≥ det/tr since
+  /// λ1 ≤ tr, so det ≥ bound·tr rules it out). Callers looking for a minimum need min_squared()
+  /// only when this is true.
+  bool MayBeBelow(double bound) const {
     switch (kind_) {
-      case Kind::kGram2: return a_ + b_ > 0.0 ? d_ / (a_ + b_) : 0.0;
-      case Kind::kGram1: return a_;
-      case Kind::kExact: return b_ * b_;
+      case Kind::kGram2: return d_ < bound * (a_ + b_);
+      case Kind::kGram1: return a_ < bound;
+      case Kind::kExact: return b_ * b_ < bound;
     }
-    return 0.0;
+    return true;
   }
   /// Whether σ_min < ratio·σ_max (0 < ratio ≤ 1), decided exactly without roots: with
   /// q = ratio², λ2/λ1 < q ⇔ det/tr² < q/(1 + q)² (x/(1 + x)² increases on [0, 1]).

@@ -42,7 +42,8 @@ class PaperScrambler final : public Disturbance {
                  const Vector3& kick_axis, double sample_rate_hz);
 
   /// Real-time. S ← Rot(k, δ)·Rot(r, ω·dt)·S; one normal draw when σ > 0, none otherwise.
-  void Advance(double t_s, StokesVector* sop, RandomSource& random) override {
+  [[gnu::always_inline]] void Advance(double t_s, StokesVector* sop,
+                                      RandomSource& random) override {
     (void)t_s;
     double x = (*sop)[0], y = (*sop)[1], z = (*sop)[2];
     if (rotation_elemental_ != ElementalAxis::kGeneral) {  // the paper's S3: a plane rotation

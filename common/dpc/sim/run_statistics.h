@@ -158,7 +158,7 @@ inline void RunStatistics::AddUpdate(bool nullspace_active, bool failed, bool ra
   failed_ += failed;
   rank_deficient_ += rank_deficient;
   clamped_ += clamped;
-  if (singular_values.min_squared_lower_bound() < min_sigma_squared_) {
+  if (singular_values.MayBeBelow(min_sigma_squared_)) {
     min_sigma_squared_ = std::min(min_sigma_squared_, singular_values.min_squared());
   }
   near_singular_ += singular_values.IsBelowRatio(kNearSingularRatio);

@@ -37,11 +37,15 @@ TEST(SingularValuesTest, LowerBoundAndNearSingularTestAgreeWithTheValues) {
     a.row(1) += (trial % 7) * a.row(0);  // some nearly parallel rows
     const Eigen::Matrix2d g = a * a.transpose();
     const SingularValues s = SingularValues::FromGram(g(0, 0), g(1, 1), g(0, 1), g.determinant());
-    EXPECT_LE(s.min_squared_lower_bound(), s.min_squared() * (1 + 1e-12));
-    EXPECT_GE(2.0 * s.min_squared_lower_bound(), s.min_squared() * (1 - 1e-12));
+    // det/tr ≤ σ_min² ≤ 2·det/tr: MayBeBelow is true for any bound above σ_min² and false for
+    // any bound below det/tr.
+    EXPECT_TRUE(s.MayBeBelow(s.min_squared() * (1 + 1e-9)));
+    EXPECT_FALSE(s.MayBeBelow(0.49 * s.min_squared()));
     for (double ratio : {0.05, 0.1, 0.5}) {
       const double actual = s.min() / s.max();
-      if (std::abs(actual - ratio) > 1e-9) EXPECT_EQ(s.IsBelowRatio(ratio), actual < ratio);
+      if (std::abs(actual - ratio) > 1e-9) {
+        EXPECT_EQ(s.IsBelowRatio(ratio), actual < ratio);
+      }
     }
   }
   EXPECT_TRUE(SingularValues::Exact(1.0, 0.05).IsBelowRatio(0.1));
