@@ -32,8 +32,9 @@ class SimObserver final : public SimulationObserver {
   SimObserver(TraceWriter* trace, ProgressBar* progress) : trace_(trace), progress_(progress) {}
 
   void OnSample(const SampleView& s) override {
-    if (trace_) trace_->Write(s.t_s, s.s_in, s.s_out, s.error_deg, s.phi_applied);
+    trace_->Write(s.t_s, s.s_in, s.s_out, s.error_deg, s.phi_applied);
   }
+  bool wants_samples() const override { return trace_ != nullptr; }
   bool OnProgress(int64_t done, int64_t total) override {
     progress_->Update(done, total);
     return !g_interrupted.load();

@@ -120,6 +120,8 @@ SimulationResult ClosedLoopSimulator::RunGeneral(SimulationObserver* observer,
   // results are those of the sample-by-sample loop; the processor overlaps the independent
   // work instead of waiting on the controller's dependency chain.
   const int64_t block = std::min<int64_t>(delay, kMaxBlock);
+  SimulationObserver* const sample_observer =
+      observer != nullptr && observer->wants_samples() ? observer : nullptr;
   std::vector<StokesVector> in_measured(static_cast<size_t>(block));
   std::vector<StokesVector> out_measured(static_cast<size_t>(block));
   int64_t block_start_slot = 0;  // delay-line slot of the block's first sample
@@ -141,8 +143,8 @@ SimulationResult ClosedLoopSimulator::RunGeneral(SimulationObserver* observer,
         in_measured[static_cast<size_t>(i)] = input_polarimeter.Measure(s_in);
         out_measured[static_cast<size_t>(i)] = output_polarimeter.Measure(s_out);
       }
-      if (observer != nullptr && --until_trace < 0) {
-        observer->OnSample(SampleView{sample, t_s, s_in, s_out, applied.phi,
+      if (sample_observer != nullptr && --until_trace < 0) {
+        sample_observer->OnSample(SampleView{sample, t_s, s_in, s_out, applied.phi,
                                       target.DistanceRad(s_out) * kRadToDeg});
         until_trace = decimation - 1;
       }

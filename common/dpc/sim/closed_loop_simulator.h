@@ -56,8 +56,11 @@ struct SampleView {
 class SimulationObserver {
  public:
   virtual ~SimulationObserver() = default;
-  /// Called for every `decimation`-th sample (index 0, decimation, 2·decimation, …).
+  /// Called for every `decimation`-th sample (index 0, decimation, 2·decimation, …), if
+  /// wants_samples().
   virtual void OnSample(const SampleView& sample) { (void)sample; }
+  /// False to receive progress only (the loop then skips building sample views).
+  virtual bool wants_samples() const { return true; }
   /// Called every kProgressInterval samples and at the end; return false to stop the run early
   /// (the summary then covers the samples simulated so far).
   virtual bool OnProgress(int64_t done, int64_t total) {

@@ -90,6 +90,8 @@ SimulationResult ClosedLoopSimulator::RunFastPath(SimulationObserver* observer,
 
   const StokesVector target_point = target.point();
   const int64_t block = std::min<int64_t>(delay, kMaxBlock);
+  SimulationObserver* const sample_observer =
+      observer != nullptr && observer->wants_samples() ? observer : nullptr;
   std::vector<StokesVector> in_measured(static_cast<size_t>(block));
   std::vector<StokesVector> out_measured(static_cast<size_t>(block));
   ControlVector observed_phi(N);
@@ -115,9 +117,9 @@ SimulationResult ClosedLoopSimulator::RunFastPath(SimulationObserver* observer,
         in_measured[static_cast<size_t>(i)] = input_polarimeter.Measure(s_in);
         out_measured[static_cast<size_t>(i)] = output_polarimeter.Measure(s_out);
       }
-      if (observer != nullptr && --until_trace < 0) {
+      if (sample_observer != nullptr && --until_trace < 0) {
         for (int e = 0; e < N; ++e) observed_phi[e] = applied.phi[e];
-        observer->OnSample(SampleView{sample, t_s, s_in, s_out, observed_phi,
+        sample_observer->OnSample(SampleView{sample, t_s, s_in, s_out, observed_phi,
                                       target.DistanceRad(s_out) * kRadToDeg});
         until_trace = decimation - 1;
       }

@@ -194,6 +194,20 @@ TEST_F(ClosedLoopSimulatorTest, ObserverGetsDecimatedSamplesProgressAndCanStop) 
   EXPECT_NEAR(r.t_s[1] - r.t_s[0], 1000 / 50e6, 1e-15);
 }
 
+TEST_F(ClosedLoopSimulatorTest, ProgressOnlyObserversGetNoSamples) {
+  class ProgressOnly : public Recorder {
+   public:
+    bool wants_samples() const override { return false; }
+  };
+  for (const char* axes : {"131", "13131"}) {  // the fast path and the general loop
+    ScenarioConfig s = Paper(axes, 1.5e-3);
+    ProgressOnly r;
+    ClosedLoopSimulator(s).Run(&r, 1);
+    EXPECT_TRUE(r.t_s.empty()) << axes;
+    EXPECT_EQ(r.progress_calls.size(), 1u) << axes;
+  }
+}
+
 TEST_F(ClosedLoopSimulatorTest, InvalidScenarioIsRejectedWithTheField) {
   ScenarioConfig s = Paper("131");
   s.controller.step = -1.0;
