@@ -1,9 +1,10 @@
 #include "dpc/sim/closed_loop_simulator.h"
 
-#include <chrono>
 #include <cmath>
 
 #include "dpc/config/scenario_builders.h"
+#include "dpc/sim/delay_line.h"
+#include "dpc/sim/simulation_run.h"
 #include "dpc/config/scenario_validation.h"
 
 namespace dpc {
@@ -78,32 +79,17 @@ ClosedLoopSimulator::~ClosedLoopSimulator() = default;
 
 SimulationResult ClosedLoopSimulator::RunGeneral(SimulationObserver* observer,
                                                  int64_t decimation) {
-  const SimulationConfig& sim = scenario_.simulation;
-  const double dt_s = 1.0 / sim.sample_rate_hz;
   const WaveplateChain& chain = *chain_;
   const Target& target = *target_;
-
-  InputSopGenerator input = MakeInputSopGenerator(scenario_.input, sim.seed, sim.sample_rate_hz);
-  PolarimeterNoise input_polarimeter(sim.polarimeter_noise_deg, sim.seed,
-                                     kInputPolarimeterStream);
-  PolarimeterNoise output_polarimeter(sim.polarimeter_noise_deg, sim.seed,
-                                      kOutputPolarimeterStream);
+  const double dt_s = 1.0 / scenario_.simulation.sample_rate_hz;
+  SimulationRun run(scenario_, target, chain.control_count(), total_samples_, observer,
+                    decimation);
   std::unique_ptr<ControlLaw> law =
       law_factory_(law_config_, chain.control_count(), target.is_point());
   ControlIntegrator integrator(chain, initial_phi_);
-  RunStatistics statistics(target, chain.control_count(), scenario_.controller.activation_s,
-                           sim.lock_threshold_deg, sim.statistics_start_s,
-                           // A hair under settle·dt, so the window opens on that very sample.
-                           (static_cast<double>(sim.settle_samples) - 0.5) * dt_s);
-
-  // The delay line: slot k mod D holds the command issued at sample k − D, as a pose.
-  const int64_t delay = delay_samples_;
-  std::vector<ChainPose> line(static_cast<size_t>(delay));
-  std::vector<uint64_t> line_version(static_cast<size_t>(delay), 0);
-  chain.ComputePose(integrator.phi(), &line[0]);
-  for (auto& pose : line) pose = line[0];
-  uint64_t version = 0;          // of the controller's latest command
-  int64_t latest = delay - 1;    // slot holding the latest command
+  ChainPose initial_pose;
+  chain.ComputePose(integrator.phi(), &initial_pose);
+  DelayLine<ChainPose> line(delay_samples_, initial_pose);
 
   ControlProblem problem;
   problem.chain = &chain;
@@ -112,96 +98,66 @@ SimulationResult ClosedLoopSimulator::RunGeneral(SimulationObserver* observer,
   problem.need_jacobian = law->needs_jacobian();
   ControlVector delta_phi;
 
-  SimulationResult result;
-  const auto start = std::chrono::steady_clock::now();
   // Blocks of up to D samples: a command issued in a block acts D samples later, so never in
   // the same block. Each block first runs the input, the plant and the polarimeters for all its
   // samples (independent of the block's commands), then the controller's updates in order. The
   // results are those of the sample-by-sample loop; the processor overlaps the independent
   // work instead of waiting on the controller's dependency chain.
-  const int64_t block = std::min<int64_t>(delay, kMaxBlock);
-  SimulationObserver* const sample_observer =
-      observer != nullptr && observer->wants_samples() ? observer : nullptr;
+  const int64_t block = std::min<int64_t>(delay_samples_, kMaxBlock);
   std::vector<StokesVector> in_measured(static_cast<size_t>(block));
   std::vector<StokesVector> out_measured(static_cast<size_t>(block));
   int64_t block_start_slot = 0;  // delay-line slot of the block's first sample
-  int64_t until_trace = 0;
   int64_t k = 0;
-  int64_t next_progress = kProgressInterval;
   while (k < total_samples_) {
     const int64_t count = std::min(block, total_samples_ - k);
     // Phase 1: input, plant, measurement, statistics of the true output.
     int64_t slot = block_start_slot;
-    for (int64_t i = 0; i < count; ++i) {
+    for (int64_t i = 0; i < count; ++i, slot = line.Next(slot)) {
       const int64_t sample = k + i;
       const double t_s = static_cast<double>(sample) * dt_s;
-      const StokesVector& s_in = input.Next();
-      const ChainPose& applied = line[static_cast<size_t>(slot)];
+      const StokesVector& s_in = run.input.Next();
+      const ChainPose& applied = line.at(slot);
       const StokesVector s_out = chain.Output(applied, s_in);
       if (sample >= activation_sample_) {
-        statistics.AddSample(t_s, s_out, applied.phi);
-        in_measured[static_cast<size_t>(i)] = input_polarimeter.Measure(s_in);
-        out_measured[static_cast<size_t>(i)] = output_polarimeter.Measure(s_out);
+        run.statistics.AddSample(t_s, s_out, applied.phi);
+        in_measured[static_cast<size_t>(i)] = run.input_polarimeter.Measure(s_in);
+        out_measured[static_cast<size_t>(i)] = run.output_polarimeter.Measure(s_out);
       }
-      if (sample_observer != nullptr && --until_trace < 0) {
-        sample_observer->OnSample(SampleView{sample, t_s, s_in, s_out, applied.phi,
-                                      target.DistanceRad(s_out) * kRadToDeg});
-        until_trace = decimation - 1;
+      if (run.TakesSample()) {
+        run.observer().OnSample(SampleView{sample, t_s, s_in, s_out, applied.phi,
+                                           target.DistanceRad(s_out) * kRadToDeg});
       }
-      if (++slot == delay) slot = 0;
     }
     // Phase 2: the controller, sample by sample; command k + i acts at k + i + D.
     slot = block_start_slot;
-    for (int64_t i = 0; i < count; ++i) {
+    for (int64_t i = 0; i < count; ++i, slot = line.Next(slot)) {
       const int64_t sample = k + i;
       bool issued = false;
       if (sample >= activation_sample_) {
         if (sample == activation_sample_) law->Activate(integrator.phi());
-        problem.pose = &line[static_cast<size_t>(latest)];
+        problem.pose = &line.latest();
         problem.s_in = in_measured[static_cast<size_t>(i)];
         problem.s_out_measured = out_measured[static_cast<size_t>(i)];
         UpdateControlProblem(&problem);
         const ControlStatus status = law->ComputeUpdate(problem, &delta_phi);
         const ControlIntegrator::Outcome outcome = integrator.Apply(status, delta_phi);
         const ControlDiagnostics& diagnostics = law->diagnostics();
-        statistics.AddUpdate(diagnostics.nullspace_active, !IsUsable(status),
-                             status == ControlStatus::kRankDeficient,
-                             outcome == ControlIntegrator::Outcome::kClamped,
-                             diagnostics.singular_values);
+        run.statistics.AddUpdate(diagnostics.nullspace_active, !IsUsable(status),
+                                 status == ControlStatus::kRankDeficient,
+                                 outcome == ControlIntegrator::Outcome::kClamped,
+                                 diagnostics.singular_values);
         if (outcome != ControlIntegrator::Outcome::kRejected) {
-          ++version;
-          chain.ComputePoseFrom(line[static_cast<size_t>(latest)], integrator.phi(),
-                                &line[static_cast<size_t>(slot)]);
-          line_version[static_cast<size_t>(slot)] = version;
+          chain.ComputePoseFrom(line.latest(), integrator.phi(), &line.issue(slot));
           issued = true;
         }
       }
-      if (!issued && line_version[static_cast<size_t>(slot)] != version) {
-        line[static_cast<size_t>(slot)] = line[static_cast<size_t>(latest)];
-        line_version[static_cast<size_t>(slot)] = version;
-      }
-      latest = slot;
-      if (++slot == delay) slot = 0;
+      line.Close(slot, issued);
     }
     block_start_slot = slot;
     k += count;
-    if (observer != nullptr && k >= next_progress) {
-      next_progress += kProgressInterval;
-      if (!observer->OnProgress(k, total_samples_)) {
-        result.stopped_early = true;
-        break;
-      }
-    }
+    if (!run.EndBlock(k)) break;
   }
-  const double wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (observer != nullptr && !result.stopped_early) observer->OnProgress(k, total_samples_);
-
-  result.summary = statistics.Summarize(k, law->diagnostics().resets);
-  result.wall_time_s = wall_s;
-  result.samples_per_s = wall_s > 0.0 ? static_cast<double>(k) / wall_s : 0.0;
-  result.final_phi = integrator.phi();
-  return result;
+  return run.Finish(k, law->diagnostics().resets, integrator.phi());
 }
 
 }  // namespace dpc

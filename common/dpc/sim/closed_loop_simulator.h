@@ -90,9 +90,6 @@ class ClosedLoopSimulator {
   static constexpr int64_t kProgressInterval = int64_t{1} << 20;
   /// The most samples processed per phase (see Run).
   static constexpr int64_t kMaxBlock = 64;
-  /// Random streams of the two polarimeters' noise (the input uses stream 1).
-  static constexpr uint64_t kInputPolarimeterStream = 2;
-  static constexpr uint64_t kOutputPolarimeterStream = 3;
 
   /// Validates the scenario (ValidateScenario: throws ScenarioError naming the bad field) and
   /// builds the device, target, law, input and polarimeters.

@@ -18,11 +18,12 @@
 // It shares the input generator, the polarimeters, the statistics and the near-singular
 // fallback with the general loop. Only round-off separates the two loops' trajectories.
 
-#include <chrono>
 #include <cmath>
 
 #include "dpc/control/task_pseudo_inverse.h"
 #include "dpc/sim/closed_loop_simulator.h"
+#include "dpc/sim/delay_line.h"
+#include "dpc/sim/simulation_run.h"
 
 namespace dpc {
 namespace {
@@ -49,19 +50,11 @@ template <int N>
 SimulationResult ClosedLoopSimulator::RunFastPath(SimulationObserver* observer,
                                                   int64_t decimation) {
   const FastPathPlan& plan = *fast_path_;
-  const SimulationConfig& sim = scenario_.simulation;
-  const double dt_s = 1.0 / sim.sample_rate_hz;
+  const double dt_s = 1.0 / scenario_.simulation.sample_rate_hz;
   const Target& target = *target_;
   const bool model_loop = scenario_.controller.loop == LoopMode::kModel;
 
-  InputSopGenerator input = MakeInputSopGenerator(scenario_.input, sim.seed, sim.sample_rate_hz);
-  PolarimeterNoise input_polarimeter(sim.polarimeter_noise_deg, sim.seed,
-                                     kInputPolarimeterStream);
-  PolarimeterNoise output_polarimeter(sim.polarimeter_noise_deg, sim.seed,
-                                      kOutputPolarimeterStream);
-  RunStatistics statistics(target, N, scenario_.controller.activation_s, sim.lock_threshold_deg,
-                           sim.statistics_start_s,
-                           (static_cast<double>(sim.settle_samples) - 0.5) * dt_s);
+  SimulationRun run(scenario_, target, N, total_samples_, observer, decimation);
   TaskPseudoInverse fallback(plan.singular_value_tolerance);
   TaskJacobian fallback_task(2, N);
   TaskVector fallback_error(2);
@@ -78,60 +71,49 @@ SimulationResult ClosedLoopSimulator::RunFastPath(SimulationObserver* observer,
   };
 
   // The delay line of poses, as in the general loop.
-  const int64_t delay = delay_samples_;
-  std::vector<FastPose<N>> line(static_cast<size_t>(delay));
   double phi[N];
   for (int e = 0; e < N; ++e) phi[e] = initial_phi_[e];
-  exact_pose(phi, &line[0]);
-  for (auto& pose : line) pose = line[0];
-  std::vector<uint64_t> line_version(static_cast<size_t>(delay), 0);
-  uint64_t version = 0;
-  int64_t latest = delay - 1;
+  FastPose<N> initial_pose;
+  exact_pose(phi, &initial_pose);
+  DelayLine<FastPose<N>> line(delay_samples_, initial_pose);
 
   const StokesVector target_point = target.point();
-  const int64_t block = std::min<int64_t>(delay, kMaxBlock);
-  SimulationObserver* const sample_observer =
-      observer != nullptr && observer->wants_samples() ? observer : nullptr;
+  const int64_t block = std::min<int64_t>(delay_samples_, kMaxBlock);
   std::vector<StokesVector> in_measured(static_cast<size_t>(block));
   std::vector<StokesVector> out_measured(static_cast<size_t>(block));
   ControlVector observed_phi(N);
 
-  SimulationResult result;
-  const auto start = std::chrono::steady_clock::now();
-  int64_t block_start_slot = 0, until_trace = 0, k = 0;
-  int64_t next_progress = kProgressInterval;
+  int64_t block_start_slot = 0, k = 0;
   while (k < total_samples_) {
     const int64_t count = std::min(block, total_samples_ - k);
     // Phase 1: input, plant, measurement, statistics of the true output.
     int64_t slot = block_start_slot;
-    for (int64_t i = 0; i < count; ++i) {
+    for (int64_t i = 0; i < count; ++i, slot = line.Next(slot)) {
       const int64_t sample = k + i;
       const double t_s = static_cast<double>(sample) * dt_s;
-      const StokesVector& s_in = input.Next();
-      const FastPose<N>& applied = line[static_cast<size_t>(slot)];
+      const StokesVector& s_in = run.input.Next();
+      const FastPose<N>& applied = line.at(slot);
       double x = s_in[0], y = s_in[1], z = s_in[2];
       for (int e = 0; e < N; ++e) RotateElemental(plan.axis[e], applied.cos[e], applied.sin[e], x, y, z);
       const StokesVector s_out(x, y, z);
       if (sample >= activation_sample_) {
-        statistics.AddSample(t_s, s_out, applied.phi);
-        in_measured[static_cast<size_t>(i)] = input_polarimeter.Measure(s_in);
-        out_measured[static_cast<size_t>(i)] = output_polarimeter.Measure(s_out);
+        run.statistics.AddSample(t_s, s_out, applied.phi);
+        in_measured[static_cast<size_t>(i)] = run.input_polarimeter.Measure(s_in);
+        out_measured[static_cast<size_t>(i)] = run.output_polarimeter.Measure(s_out);
       }
-      if (sample_observer != nullptr && --until_trace < 0) {
+      if (run.TakesSample()) {
         for (int e = 0; e < N; ++e) observed_phi[e] = applied.phi[e];
-        sample_observer->OnSample(SampleView{sample, t_s, s_in, s_out, observed_phi,
-                                      target.DistanceRad(s_out) * kRadToDeg});
-        until_trace = decimation - 1;
+        run.observer().OnSample(SampleView{sample, t_s, s_in, s_out, observed_phi,
+                                           target.DistanceRad(s_out) * kRadToDeg});
       }
-      if (++slot == delay) slot = 0;
     }
     // Phase 2: the controller, sample by sample.
     slot = block_start_slot;
-    for (int64_t i = 0; i < count; ++i) {
+    for (int64_t i = 0; i < count; ++i, slot = line.Next(slot)) {
       const int64_t sample = k + i;
       bool issued = false;
       if (sample >= activation_sample_) {
-        const FastPose<N>& current = line[static_cast<size_t>(latest)];
+        const FastPose<N>& current = line.latest();
         const StokesVector& s_in = in_measured[static_cast<size_t>(i)];
         // Kinematics in the input frame: B_e = M_e ⋯ M_1 (b_rc), Ω′_e (w[e]).
         double b00 = 1, b01 = 0, b02 = 0, b10 = 0, b11 = 1, b12 = 0, b20 = 0, b21 = 0, b22 = 1;
@@ -221,12 +203,12 @@ SimulationResult ClosedLoopSimulator::RunFastPath(SimulationObserver* observer,
         }
         bool finite = true;
         for (int e = 0; e < N; ++e) finite = finite && std::isfinite(delta[e]);
-        statistics.AddUpdate(nullspace_active, !finite, finite && rank < 2, false,
-                             singular_values);
+        run.statistics.AddUpdate(nullspace_active, !finite, finite && rank < 2, false,
+                                 singular_values);
         if (finite) {
           for (int e = 0; e < N; ++e) phi[e] = current.phi[e] + delta[e];
           // The new command's pose, by angle addition (ComputePoseFrom).
-          FastPose<N>& next = line[static_cast<size_t>(slot)];
+          FastPose<N>& next = line.issue(slot);
           const FastPose<N>& previous = current;  // may be `next` when D = 1
           if (previous.incremental_steps >= WaveplateChain::kMaxIncrementalSteps) {
             exact_pose(phi, &next);
@@ -244,38 +226,18 @@ SimulationResult ClosedLoopSimulator::RunFastPath(SimulationObserver* observer,
             }
             next.incremental_steps = steps;
           }
-          ++version;
-          line_version[static_cast<size_t>(slot)] = version;
           issued = true;
         }
       }
-      if (!issued && line_version[static_cast<size_t>(slot)] != version) {
-        line[static_cast<size_t>(slot)] = line[static_cast<size_t>(latest)];
-        line_version[static_cast<size_t>(slot)] = version;
-      }
-      latest = slot;
-      if (++slot == delay) slot = 0;
+      line.Close(slot, issued);
     }
     block_start_slot = slot;
     k += count;
-    if (observer != nullptr && k >= next_progress) {
-      next_progress += kProgressInterval;
-      if (!observer->OnProgress(k, total_samples_)) {
-        result.stopped_early = true;
-        break;
-      }
-    }
+    if (!run.EndBlock(k)) break;
   }
-  const double wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (observer != nullptr && !result.stopped_early) observer->OnProgress(k, total_samples_);
-
-  result.summary = statistics.Summarize(k, 0);
-  result.wall_time_s = wall_s;
-  result.samples_per_s = wall_s > 0.0 ? static_cast<double>(k) / wall_s : 0.0;
-  result.final_phi.resize(N);
-  for (int e = 0; e < N; ++e) result.final_phi[e] = line[static_cast<size_t>(latest)].phi[e];
-  return result;
+  ControlVector final_phi(N);
+  for (int e = 0; e < N; ++e) final_phi[e] = line.latest().phi[e];
+  return run.Finish(k, 0, final_phi);
 }
 
 template SimulationResult ClosedLoopSimulator::RunFastPath<3>(SimulationObserver*, int64_t);
