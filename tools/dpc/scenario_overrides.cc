@@ -73,6 +73,7 @@ void ScenarioOverrides::Apply(ScenarioConfig* s) const {
       throw ScenarioError("--loop", fmt::format("unknown loop mode \"{}\"; use model or measured",
                                                 *loop));
     }
+    field_to_flag_["controller.loop"] = "--loop";
   }
   set(s->controller.step, step, "controller.step", "--step");
   set(s->controller.nullspace_step, nullspace_step, "controller.nullspace_step",
