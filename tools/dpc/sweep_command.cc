@@ -10,6 +10,7 @@
 #include <map>
 
 #include "dpc/config/scenario_error.h"
+#include "dpc/config/scenario_validation.h"
 #include "dpc/control/control_law_factory.h"
 #include "dpc/sim/sweep_runner.h"
 #include "exit_codes.h"
@@ -98,6 +99,18 @@ int RunSweepCommand(const SweepOptions& o) {
             grid.Apply(&scenario);
           } catch (const ScenarioError& e) {
             fmt::print(stderr, "dpc sweep: {}\n", e.what());
+            return kExitInvalidInput;
+          }
+          try {
+            ValidateScenario(scenario);
+          } catch (const ScenarioError& e) {
+            // A field the grid set is named by the run; the others by the flag that set them.
+            const std::string text = grid.FlagForField(e.location())
+                                         ? fmt::format("invalid scenario: {}", e.what())
+                                         : DescribeScenarioError(e, o.overrides);
+            fmt::print(stderr,
+                       "dpc sweep: {} (run: device {}, method {}, rate {:g} rad/s, seed {})\n",
+                       text, device.empty() ? "scenario" : device, method, rate, seed);
             return kExitInvalidInput;
           }
           scenarios.push_back(std::move(scenario));
