@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <csignal>
@@ -12,6 +13,7 @@
 #include "dpc/config/scenario_error.h"
 #include "dpc/config/scenario_validation.h"
 #include "dpc/control/control_law_factory.h"
+#include "dpc/sim/loop_stability.h"
 #include "dpc/sim/sweep_runner.h"
 #include "exit_codes.h"
 #include "json_report.h"
@@ -32,6 +34,15 @@ struct Cell {
   int failed = 0;
   std::string error;
 };
+
+// The sweep flag behind a single-run flag that the grid sets.
+std::string SweepFlagFor(const std::string& run_flag) {
+  if (run_flag == "--method") return "--methods";
+  if (run_flag == "--stages-axes") return "--devices";
+  if (run_flag == "--rate-rad-per-s") return "--rates";
+  if (run_flag == "--seed") return "--seeds";
+  return run_flag;
+}
 
 double Mean(const std::vector<double>& v) {
   double sum = 0;
@@ -81,6 +92,7 @@ int RunSweepCommand(const SweepOptions& o) {
   if (seeds.empty()) seeds.push_back(base.simulation.seed);
 
   // Build the grid; invalid combinations are reported before anything runs.
+  std::vector<std::string> warnings;  // each distinct one once
   std::vector<ScenarioConfig> scenarios;
   std::vector<Cell> cells;
   std::vector<size_t> cell_of_run;
@@ -98,7 +110,8 @@ int RunSweepCommand(const SweepOptions& o) {
           try {
             grid.Apply(&scenario);
           } catch (const ScenarioError& e) {
-            fmt::print(stderr, "dpc sweep: {}\n", e.what());
+            // The grid's values come from the sweep's list flags: name those.
+            fmt::print(stderr, "dpc sweep: {}: {}\n", SweepFlagFor(e.location()), e.message());
             return kExitInvalidInput;
           }
           try {
@@ -113,6 +126,11 @@ int RunSweepCommand(const SweepOptions& o) {
                        text, device.empty() ? "scenario" : device, method, rate, seed);
             return kExitInvalidInput;
           }
+          for (const std::string& warning : ScenarioWarnings(scenario)) {
+            if (std::find(warnings.begin(), warnings.end(), warning) == warnings.end()) {
+              warnings.push_back(warning);
+            }
+          }
           scenarios.push_back(std::move(scenario));
           cell_of_run.push_back(cells.size());
         }
@@ -121,6 +139,7 @@ int RunSweepCommand(const SweepOptions& o) {
     }
   }
 
+  for (const std::string& warning : warnings) fmt::print(stderr, "dpc sweep: warning: {}\n", warning);
   ProgressBar progress("dpc sweep", !o.no_progress && ProgressBar::StderrIsTerminal());
   g_stop.store(false);
   const auto previous_int = std::signal(SIGINT, OnSweepInterrupt);
