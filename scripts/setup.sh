@@ -14,6 +14,8 @@ PACKAGES=(
   libprotobuf-dev protobuf-compiler
   libgtest-dev libgmock-dev libbenchmark-dev
   gnuplot-nox time
+  libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
+  cyclonedds-dev cyclonedds-tools iproute2 procps
 )
 
 missing=()

@@ -514,6 +514,15 @@ int64_t TotalSamples(const SimulationConfig& simulation) {
   return SaturatingRound(simulation.duration_s * simulation.sample_rate_hz);
 }
 
+void ValidateDeviceStages(const std::vector<StageConfig>& stages) { ValidateStages(stages); }
+
+void ValidateTargetConfig(const TargetConfig& target) { ValidateTarget(target); }
+
+void ValidateControllerConfig(const ControllerConfig& controller, int control_count,
+                              const TargetConfig& target, const SimulationConfig& simulation) {
+  ValidateController(controller, control_count, target, simulation);
+}
+
 void ValidateScenario(const ScenarioConfig& scenario) {
   ValidateSimulation(scenario.simulation);
   ValidateStages(scenario.stages);

@@ -58,6 +58,14 @@ inline constexpr double kMinAxisLength = 1e-9;
 /// scenario can be built and run.
 void ValidateScenario(const ScenarioConfig& scenario);
 
+/// The parts of ValidateScenario that the bench services check on their own (a device
+/// description or a target that arrives over DDS; a controller that joins an existing bench).
+/// Same rules and field paths as in a scenario file.
+void ValidateDeviceStages(const std::vector<StageConfig>& stages);
+void ValidateTargetConfig(const TargetConfig& target);
+void ValidateControllerConfig(const ControllerConfig& controller, int control_count,
+                              const TargetConfig& target, const SimulationConfig& simulation);
+
 /// The number of control signals the stages have: one per fixed-axis stage, one per controlled
 /// angle of an adjustable-axis stage.
 int ScenarioControlCount(const std::vector<StageConfig>& stages);

@@ -1,0 +1,201 @@
+#pragma once
+// One DDS participant of the bench, its typed writers and readers, QoS from XML profiles.
+//
+// Profiles: the file named by FASTRTPS_DEFAULT_PROFILES_FILE (the variable Fast DDS 2.9 reads);
+// when it is unset, the shipped loopback-only profile (deploy/fastdds/loopback.xml), so that no
+// default configuration talks to the network. The participant QoS is the profile
+// "dpc.participant"; each topic's writer and reader QoS are "<topic>.writer" / "<topic>.reader"
+// (topics.h). A missing file or profile is an error that names it: nothing starts with
+// unintended QoS.
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+
+#include "dpc/bus/topics.h"
+
+namespace dpc::bus {
+
+/// Fast DDS refused something (a profile, an entity); the message says what and where.
+class BusError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// The environment variable Fast DDS 2.9 reads its XML profiles from.
+inline constexpr char kProfilesEnvironmentVariable[] = "FASTRTPS_DEFAULT_PROFILES_FILE";
+/// The participant profile every process uses.
+inline constexpr char kParticipantProfile[] = "dpc.participant";
+
+/// The profiles file in effect: $FASTRTPS_DEFAULT_PROFILES_FILE, else the shipped loopback
+/// profile (found next to the source tree or the installed share directory). Throws BusError if
+/// neither exists.
+std::string ResolveProfilesFile();
+
+struct BusOptions {
+  int domain_id = 0;
+  std::string participant_name = "dpc";
+};
+
+/// Counters of one reader, readable from any thread.
+struct ReaderCounters {
+  std::atomic<uint64_t> samples{0};          ///< delivered to the callback
+  std::atomic<uint64_t> other_benches{0};    ///< samples of another bench_id, skipped
+  std::atomic<uint64_t> deadline_misses{0};  ///< DDS requested-deadline misses
+  std::atomic<int> matched_writers{0};
+};
+
+template <typename Message>
+class Writer {
+ public:
+  Writer(eprosima::fastdds::dds::DataWriter* writer, eprosima::fastdds::dds::Publisher* publisher)
+      : writer_(writer), publisher_(publisher) {}
+  ~Writer() { publisher_->delete_datawriter(writer_); }
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
+
+  /// Thread-safe (Fast DDS serializes writes). False if Fast DDS refused the sample.
+  bool Write(const Message& message) {
+    return writer_->write(const_cast<Message*>(&message));
+  }
+  int matched_readers() const {
+    eprosima::fastdds::dds::PublicationMatchedStatus status;
+    writer_->get_publication_matched_status(status);
+    return status.current_count;
+  }
+  eprosima::fastdds::dds::DataWriter* raw() const { return writer_; }
+
+ private:
+  eprosima::fastdds::dds::DataWriter* writer_;
+  eprosima::fastdds::dds::Publisher* publisher_;
+};
+
+/// Delivers every valid sample of one topic to a callback, on Fast DDS's listener thread.
+/// With a bench id, samples of other benches are counted and skipped.
+template <typename Message>
+class Reader : public eprosima::fastdds::dds::DataReaderListener {
+ public:
+  using Callback = std::function<void(const Message&, const eprosima::fastdds::dds::SampleInfo&)>;
+
+  Reader(std::string bench_id, Callback callback)
+      : bench_id_(std::move(bench_id)), callback_(std::move(callback)) {}
+  ~Reader() override {
+    if (reader_ != nullptr) {
+      reader_->set_listener(nullptr);
+      subscriber_->delete_datareader(reader_);
+    }
+  }
+  Reader(const Reader&) = delete;
+  Reader& operator=(const Reader&) = delete;
+
+  void Attach(eprosima::fastdds::dds::DataReader* reader,
+              eprosima::fastdds::dds::Subscriber* subscriber) {
+    reader_ = reader;
+    subscriber_ = subscriber;
+  }
+
+  void on_data_available(eprosima::fastdds::dds::DataReader* reader) override {
+    eprosima::fastdds::dds::SampleInfo info;
+    while (reader->take_next_sample(&message_, &info) == ReturnCode_t::RETCODE_OK) {
+      if (!info.valid_data) continue;
+      if (!bench_id_.empty() && bench_id_ != message_.bench_id().to_string()) {
+        counters_.other_benches.fetch_add(1, std::memory_order_relaxed);
+        continue;
+      }
+      counters_.samples.fetch_add(1, std::memory_order_relaxed);
+      callback_(message_, info);
+    }
+  }
+  void on_requested_deadline_missed(
+      eprosima::fastdds::dds::DataReader*,
+      const eprosima::fastdds::dds::RequestedDeadlineMissedStatus&) override {
+    counters_.deadline_misses.fetch_add(1, std::memory_order_relaxed);
+  }
+  void on_subscription_matched(
+      eprosima::fastdds::dds::DataReader*,
+      const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
+    counters_.matched_writers.store(status.current_count, std::memory_order_relaxed);
+  }
+
+  const ReaderCounters& counters() const { return counters_; }
+  eprosima::fastdds::dds::DataReader* raw() const { return reader_; }
+
+ private:
+  std::string bench_id_;
+  Callback callback_;
+  Message message_;  ///< taken into; only the listener thread touches it
+  ReaderCounters counters_;
+  eprosima::fastdds::dds::DataReader* reader_ = nullptr;
+  eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
+};
+
+class BusParticipant {
+ public:
+  /// Loads the profiles (ResolveProfilesFile) and creates the participant. Throws BusError.
+  explicit BusParticipant(const BusOptions& options);
+  ~BusParticipant();
+  BusParticipant(const BusParticipant&) = delete;
+  BusParticipant& operator=(const BusParticipant&) = delete;
+
+  /// A writer with the topic's "<topic>.writer" profile (or `profile` if given).
+  template <typename Message>
+  std::unique_ptr<Writer<Message>> MakeWriter(const std::string& profile = {}) {
+    using Traits = TopicTraits<Message>;
+    auto* topic = TopicFor(std::string(Traits::kTopic),
+                           eprosima::fastdds::dds::TypeSupport(new typename Traits::PubSubType()));
+    auto* writer = CreateWriter(topic, profile.empty() ? std::string(Traits::kWriterProfile) : profile);
+    return std::make_unique<Writer<Message>>(writer, publisher_);
+  }
+
+  /// A reader with the topic's "<topic>.reader" profile; `callback` runs on Fast DDS's listener
+  /// thread for each valid sample of `bench_id` (all benches if empty).
+  template <typename Message>
+  std::unique_ptr<Reader<Message>> MakeReader(const std::string& bench_id,
+                                              typename Reader<Message>::Callback callback,
+                                              const std::string& profile = {}) {
+    using Traits = TopicTraits<Message>;
+    auto* topic = TopicFor(std::string(Traits::kTopic),
+                           eprosima::fastdds::dds::TypeSupport(new typename Traits::PubSubType()));
+    auto reader = std::make_unique<Reader<Message>>(bench_id, std::move(callback));
+    reader->Attach(CreateReader(topic, profile.empty() ? std::string(Traits::kReaderProfile) : profile,
+                                reader.get()),
+                   subscriber_);
+    return reader;
+  }
+
+  eprosima::fastdds::dds::DomainParticipant* raw() const { return participant_; }
+  const std::string& profiles_file() const { return profiles_file_; }
+
+ private:
+  eprosima::fastdds::dds::Topic* TopicFor(const std::string& name,
+                                          eprosima::fastdds::dds::TypeSupport type);
+  eprosima::fastdds::dds::DataWriter* CreateWriter(eprosima::fastdds::dds::Topic* topic,
+                                                   const std::string& profile);
+  eprosima::fastdds::dds::DataReader* CreateReader(eprosima::fastdds::dds::Topic* topic,
+                                                   const std::string& profile,
+                                                   eprosima::fastdds::dds::DataReaderListener* listener);
+
+  std::string profiles_file_;
+  eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
+  eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
+  eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
+  std::mutex mutex_;
+  std::vector<eprosima::fastdds::dds::Topic*> topics_;
+};
+
+}  // namespace dpc::bus

@@ -1,0 +1,77 @@
+#include "service_runtime.h"
+
+#include <csignal>
+#include <ctime>
+
+#include <spdlog/sinks/stdout_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include "dpc/scenario_io/scenario_text.h"
+#include "scenario_loading.h"
+
+namespace dpc::services {
+
+void AddCommonOptions(CLI::App& app, CommonOptions* options) {
+  app.add_option("SCENARIO", options->scenario_file,
+                 "Scenario file (text format, common/proto/dpc/scenario.proto); default: the "
+                 "embedded bench scenario (deploy/scenarios/bench_default.pbtxt)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--domain", options->domain_id, "DDS domain id")
+      ->check(CLI::Range(0, 232))
+      ->capture_default_str();
+  app.add_option("--bench-id", options->bench_id,
+                 "Bench id: the key of every topic, so that benches can share a domain")
+      ->check([](const std::string& id) -> std::string {
+        if (id.empty() || id.size() > 63) return "bench id must have 1 to 63 characters";
+        return {};
+      })
+      ->capture_default_str();
+  app.add_option("--log-level", options->log_level, "trace|debug|info|warn|error|off")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}))
+      ->capture_default_str();
+  options->overrides.AddTo(app);
+}
+
+ScenarioConfig LoadServiceScenario(const CommonOptions& options) {
+  ScenarioConfig scenario =
+      options.scenario_file.empty()
+          ? ScenarioFromProto(ParseScenarioText(DefaultBenchScenarioText(), "<bench_default.pbtxt>"))
+          : ReadScenarioFile(options.scenario_file);
+  options.overrides.Apply(&scenario);
+  return scenario;
+}
+
+std::string DescribeError(const ScenarioError& error, const CommonOptions& options) {
+  return tools::DescribeScenarioError(error, options.overrides);
+}
+
+void SetUpLogging(const std::string& service, const CommonOptions& options) {
+  auto logger = spdlog::stderr_logger_mt(service);
+  logger->set_pattern(fmt::format("%H:%M:%S.%e [{} {}] %^%l%$: %v", service, options.bench_id));
+  logger->set_level(spdlog::level::from_str(options.log_level));
+  spdlog::set_default_logger(logger);
+}
+
+ShutdownSignals::ShutdownSignals() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+}
+
+bool ShutdownSignals::Wait(std::chrono::milliseconds timeout) {
+  if (signal_ != 0) return true;
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(timeout).count();
+  timespec ts{static_cast<time_t>(ns / 1000000000), static_cast<long>(ns % 1000000000)};
+  const int s = sigtimedwait(&set, nullptr, &ts);
+  if (s > 0) signal_ = s;
+  return signal_ != 0;
+}
+
+}  // namespace dpc::services

@@ -1,0 +1,63 @@
+#pragma once
+// What every bench service shares: the common command-line options (--domain, --bench-id, the
+// scenario file), the scenario (a file or the embedded default), clean shutdown on SIGINT and
+// SIGTERM, and logging.
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "dpc/config/scenario_config.h"
+#include "dpc/config/scenario_error.h"
+#include "scenario_overrides.h"
+
+namespace dpc::services {
+
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitRuntimeError = 1;
+inline constexpr int kExitInvalidInput = 2;
+
+struct CommonOptions {
+  int domain_id = 0;
+  std::string bench_id = "bench1";
+  std::string scenario_file;   ///< empty: the embedded default (deploy/scenarios/bench_default.pbtxt)
+  std::string log_level = "info";
+  tools::ScenarioOverrides overrides;   ///< the `dpc sim` flags (--method, --step, --rate-rad-per-s, …)
+};
+
+/// Adds --domain, --bench-id, the positional SCENARIO, --log-level and the scenario override
+/// flags of `dpc sim`.
+void AddCommonOptions(CLI::App& app, CommonOptions* options);
+
+/// The text of deploy/scenarios/bench_default.pbtxt, compiled in.
+const char* DefaultBenchScenarioText();
+
+/// The scenario file's contents, or the embedded default, with the override flags applied;
+/// unvalidated (each service validates the parts it uses). Throws ScenarioError.
+ScenarioConfig LoadServiceScenario(const CommonOptions& options);
+
+/// "invalid scenario: controller.step: … (set by --step)".
+std::string DescribeError(const ScenarioError& error, const CommonOptions& options);
+
+/// Sets up spdlog ("[driver bench1] …" on stderr) at `level`; throws CLI::ValidationError for an
+/// unknown level.
+void SetUpLogging(const std::string& service, const CommonOptions& options);
+
+/// SIGINT and SIGTERM as a request to stop. Construct on the main thread before any other
+/// thread starts (Fast DDS's included): the signals are blocked in every thread and collected
+/// by Wait. SIGPIPE is ignored.
+class ShutdownSignals {
+ public:
+  ShutdownSignals();
+  /// Waits up to `timeout` for SIGINT/SIGTERM; true once one has arrived (then always true).
+  bool Wait(std::chrono::milliseconds timeout);
+  bool requested() const { return signal_ != 0; }
+  int signal() const { return signal_; }
+
+ private:
+  int signal_ = 0;
+};
+
+}  // namespace dpc::services

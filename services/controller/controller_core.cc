@@ -1,0 +1,216 @@
+#include "controller_core.h"
+
+#include <chrono>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "dpc/bus/message_conversion.h"
+#include "dpc/config/scenario_builders.h"
+#include "dpc/config/scenario_validation.h"
+
+namespace dpc::services {
+namespace {
+constexpr double kRadToDeg = 180.0 / M_PI;
+}
+
+ControllerCore::ControllerCore(ControllerSettings settings) : settings_(std::move(settings)) {
+  law_name_ = std::string(MethodName(settings_.controller.method));
+}
+
+ControllerCore::~ControllerCore() = default;
+
+std::string ControllerCore::OnDevice(const msg::DeviceDescription& description) {
+  try {
+    std::vector<StageConfig> stages = bus::StagesFromDescription(description);
+    const int controls = ScenarioControlCount(stages);
+    // The law must fit the device and the current target (inverse needs a square task).
+    TargetConfig target_config;
+    if (target_) {
+      target_config.kind = target_->is_point() ? TargetConfig::Kind::kPoint : TargetConfig::Kind::kSet;
+    }
+    ValidateControllerConfig(settings_.controller, controls, target_config, settings_.simulation);
+    auto chain = std::make_unique<WaveplateChain>(BuildChain(stages));
+    const ControlLawConfig law_config = BuildControlLawConfig(settings_.controller, settings_.simulation);
+    law_for_point_ = target_config.kind == TargetConfig::Kind::kPoint;
+    auto law = MakeControlLaw(law_config, controls, law_for_point_);
+    chain_ = std::move(chain);
+    law_ = std::move(law);
+    integrator_ = std::make_unique<ControlIntegrator>(*chain_, ControlVector::Zero(controls));
+    applied_phi_ = ControlVector::Zero(controls);
+    have_state_ = false;
+    activated_ = false;
+    problem_.chain = chain_.get();
+    problem_.loop_mode = settings_.controller.loop;
+    problem_.need_jacobian = law_->needs_jacobian();
+    condition_ = target_ ? "waiting for the driver's state" : "waiting for the target";
+    return {};
+  } catch (const std::exception& e) {
+    condition_ = fmt::format("unusable device description: {}", e.what());
+    return condition_;
+  }
+}
+
+std::string ControllerCore::OnTarget(const msg::Target& message) {
+  if (message.revision() <= target_revision_ && target_) return {};  // already have it
+  try {
+    const TargetConfig config = bus::TargetFromMessage(message);
+    target_ = std::make_unique<Target>(BuildTarget(config));
+    target_revision_ = message.revision();
+    if (chain_ && law_for_point_ != target_->is_point()) {
+      // A point law and a set law have different task sizes: rebuild the law.
+      const ControlLawConfig law_config = BuildControlLawConfig(settings_.controller, settings_.simulation);
+      law_ = MakeControlLaw(law_config, chain_->control_count(), target_->is_point());
+      law_for_point_ = target_->is_point();
+      problem_.need_jacobian = law_->needs_jacobian();
+      activated_ = false;
+    }
+    problem_.target = target_.get();
+    if (!chain_) condition_ = "waiting for the device description";
+    else if (!have_state_) condition_ = "waiting for the driver's state";
+    return {};
+  } catch (const std::exception& e) {
+    condition_ = fmt::format("unusable target: {}", e.what());
+    return condition_;
+  }
+}
+
+void ControllerCore::Resync(const ControlVector& phi) {
+  integrator_->Reset(phi);
+  activated_ = false;
+}
+
+void ControllerCore::OnState(const msg::WaveplateState& state) {
+  if (!chain_) return;
+  const size_t controls = static_cast<size_t>(chain_->control_count());
+  if (state.phi_applied().size() != controls) return;  // another device's state
+  for (double v : state.phi_applied()) {
+    if (!std::isfinite(v)) return;
+  }
+  for (size_t i = 0; i < controls; ++i) applied_phi_[static_cast<int>(i)] = state.phi_applied()[i];
+  const bool first = !have_state_;
+  have_state_ = true;
+  obeyed_ = state.mode() == msg::DRIVER_ACTIVE &&
+            state.obeyed_controller_id().to_string() == settings_.controller_id;
+  if (first) {
+    Resync(applied_phi_);
+    return;
+  }
+  const bool answers_latest = state.answers_sample() >= last_answered_sample_;
+  if (!obeyed_ && (answers_latest || last_answered_sample_ == 0)) {
+    Resync(applied_phi_);
+  } else if (obeyed_ && state.answers_sample() == last_answered_sample_) {
+    for (bool limited : state.saturated()) {
+      if (limited) {
+        Resync(applied_phi_);  // the driver clamped our latest command: no wind-up
+        break;
+      }
+    }
+  }
+}
+
+void ControllerCore::RejectSample(std::string reason) {
+  ++rejected_samples_;
+  last_rejection_ = std::move(reason);
+}
+
+std::optional<msg::WaveplateCommand> ControllerCore::OnSample(const msg::StokesSample& sample,
+                                                              int64_t now_ns, int64_t wall_ns) {
+  if (std::string reason = bus::CheckStokesSample(sample); !reason.empty()) {
+    RejectSample(reason);
+    return std::nullopt;
+  }
+  if (!configured()) return std::nullopt;
+  if (sample.sequence_number() <= last_sample_) {
+    // Out of order or repeated (a restarted bench starts again at 1: accept after a gap).
+    if (now_ns - last_sample_ns_ < static_cast<int64_t>(settings_.freeze_after_s * 1e9)) return std::nullopt;
+  }
+  if (last_sample_ns_ != 0 &&
+      now_ns - last_sample_ns_ > static_cast<int64_t>(settings_.freeze_after_s * 1e9)) {
+    Resync(applied_phi_);  // samples resume after a gap: re-join from what is applied
+  }
+  last_sample_ = sample.sequence_number();
+  last_sample_ns_ = now_ns;
+
+  const auto start = std::chrono::steady_clock::now();
+  if (!activated_) {
+    law_->Activate(integrator_->phi());
+    activated_ = true;
+  }
+  chain_->ComputePose(integrator_->phi(), &pose_);
+  problem_.pose = &pose_;
+  problem_.s_in = bus::ToStokes(sample.s_in());
+  problem_.s_out_measured = bus::ToStokes(sample.s_out());
+  UpdateControlProblem(&problem_);
+  const ControlStatus status = law_->ComputeUpdate(problem_, &delta_phi_);
+  const ControlIntegrator::Outcome outcome = integrator_->Apply(status, delta_phi_);
+  const double compute_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  ++updates_;
+  ++interval_updates_;
+  interval_compute_s_ += compute_s;
+  interval_compute_max_s_ = std::max(interval_compute_max_s_, compute_s);
+  const ControlDiagnostics& diagnostics = law_->diagnostics();
+  if (diagnostics.nullspace_active) ++interval_nullspace_;
+  sigma_max_ = diagnostics.singular_values.max();
+  sigma_min_ = diagnostics.singular_values.min();
+  error_deg_ = target_->DistanceRad(problem_.s_out_measured) * kRadToDeg;
+  condition_ = obeyed_ ? "tracking" : "standby (following the applied φ)";
+  if (outcome == ControlIntegrator::Outcome::kRejected) {
+    // Never applied; the command repeats the current φ, so the driver (and a lockstep bench)
+    // still gets its answer, as `dpc sim` carries the latest command on.
+    ++failed_updates_;
+    last_rejection_ = fmt::format("update failed: {}", ControlStatusName(status));
+  }
+
+  msg::WaveplateCommand command;
+  command.bench_id(settings_.bench_id);
+  command.controller_id(settings_.controller_id);
+  command.priority(settings_.priority);
+  command.sequence_number(++sequence_);
+  command.answers_sample(sample.sequence_number());
+  command.sample_time_ns(sample.sample_time_ns());
+  command.sample_publish_time_ns(sample.publish_time_ns());
+  const ControlVector& phi = integrator_->phi();
+  command.phi().assign(phi.data(), phi.data() + phi.size());
+  command.publish_time_ns(wall_ns);
+  last_answered_sample_ = sample.sequence_number();
+  return command;
+}
+
+msg::ControllerStatus ControllerCore::TakeStatus(int64_t now_ns, int64_t wall_ns,
+                                                 uint64_t missed_deadlines) {
+  if (configured() && last_sample_ns_ != 0 &&
+      now_ns - last_sample_ns_ > static_cast<int64_t>(settings_.freeze_after_s * 1e9)) {
+    condition_ = fmt::format("frozen: no sample for {:.0f} ms",
+                             static_cast<double>(now_ns - last_sample_ns_) * 1e-6);
+  } else if (configured() && last_sample_ns_ == 0) {
+    condition_ = "waiting for samples";
+  }
+  msg::ControllerStatus status;
+  status.bench_id(settings_.bench_id);
+  status.controller_id(settings_.controller_id);
+  status.priority(settings_.priority);
+  status.law(law_name_);
+  status.obeyed(obeyed_);
+  status.condition(condition_.substr(0, 127));
+  status.answers_sample(last_answered_sample_);
+  status.error_deg(error_deg_);
+  status.sigma_max(sigma_max_);
+  status.sigma_min(sigma_min_);
+  status.nullspace_active_fraction(
+      interval_updates_ ? static_cast<double>(interval_nullspace_) / static_cast<double>(interval_updates_) : 0.0);
+  status.compute_time_mean_s(interval_updates_ ? interval_compute_s_ / static_cast<double>(interval_updates_) : 0.0);
+  status.compute_time_max_s(interval_compute_max_s_);
+  status.updates(updates_);
+  status.failed_updates(failed_updates_);
+  status.rejected_samples(rejected_samples_);
+  status.missed_deadlines(missed_deadlines);
+  status.last_rejection(last_rejection_.substr(0, 255));
+  status.publish_time_ns(wall_ns);
+  interval_updates_ = interval_nullspace_ = 0;
+  interval_compute_s_ = interval_compute_max_s_ = 0.0;
+  return status;
+}
+
+}  // namespace dpc::services

@@ -1,0 +1,106 @@
+#pragma once
+// The Jacobian controller's logic, without DDS. The wiring (main.cc) feeds it what arrives and
+// publishes what it returns, under one lock.
+//
+// Configuration comes from the bus: the device description (TRANSIENT_LOCAL, from the driver)
+// builds the chain, the target topic the target; the law and its settings come from the
+// scenario's controller section and flags. Until the device, the target and a driver state have
+// arrived the controller answers nothing (status says what it waits for).
+//
+// Bumpless joining and switching: while the driver obeys another controller (or holds), this
+// one follows the applied φ from the driver's state: its integrator is reset to phi_applied of
+// each state that answers a sample at least as new as its own latest command. Its commands are
+// then "applied φ + Δφ", so the moment the driver obeys it nothing jumps. Once obeyed, it
+// integrates its own commands (paper eq. 6), as `dpc sim` does; if the driver reports that it
+// limited this controller's latest command, the integrator takes the applied φ (no wind-up).
+//
+// When samples stop, nothing is integrated (the controller only acts on samples): the
+// integrator is frozen, the status says "frozen", and after a gap longer than freeze_after_s the
+// controller re-joins from the applied φ when samples resume.
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "dpc/config/scenario_config.h"
+#include "dpc/control/control_integrator.h"
+#include "dpc/control/control_law.h"
+#include "dpc/control/control_law_factory.h"
+#include "dpc/control/control_problem.h"
+#include "dpc/control/target.h"
+#include "dpc/msg/bench.h"
+#include "dpc/optics/waveplate_chain.h"
+
+namespace dpc::services {
+
+struct ControllerSettings {
+  std::string bench_id = "bench1";
+  std::string controller_id = "controller";
+  int32_t priority = 0;
+  ControllerConfig controller;      ///< law, step, loop mode (scenario's controller section)
+  SimulationConfig simulation;      ///< for laws that need sample-rate settings (dither)
+  double freeze_after_s = 20e-3;    ///< a sample gap longer than this freezes the loop
+};
+
+class ControllerCore {
+ public:
+  explicit ControllerCore(ControllerSettings settings);
+  ~ControllerCore();
+
+  /// Returns an error message if the description is unusable (the controller keeps its previous
+  /// device, if any).
+  std::string OnDevice(const msg::DeviceDescription& description);
+  std::string OnTarget(const msg::Target& target);
+  void OnState(const msg::WaveplateState& state);
+  /// A polarimeter sample at wall time `wall_ns`, monotonic `now_ns`: the command answering it,
+  /// or nullopt (not configured, malformed, stale sample). A failed update answers with φ unchanged.
+  std::optional<msg::WaveplateCommand> OnSample(const msg::StokesSample& sample, int64_t now_ns,
+                                                int64_t wall_ns);
+
+  /// The status since the previous call (resets the per-interval figures).
+  msg::ControllerStatus TakeStatus(int64_t now_ns, int64_t wall_ns, uint64_t missed_deadlines);
+
+  bool configured() const { return chain_ != nullptr && target_ != nullptr && have_state_; }
+  bool obeyed() const { return obeyed_; }
+  const ControlVector& phi() const { return integrator_->phi(); }
+  uint64_t rejected_samples() const { return rejected_samples_; }
+  const std::string& last_rejection() const { return last_rejection_; }
+  const std::string& condition() const { return condition_; }
+
+ private:
+  void Resync(const ControlVector& phi);
+  void RejectSample(std::string reason);
+
+  ControllerSettings settings_;
+  std::unique_ptr<WaveplateChain> chain_;
+  std::unique_ptr<Target> target_;
+  std::unique_ptr<ControlLaw> law_;
+  std::unique_ptr<ControlIntegrator> integrator_;
+  ChainPose pose_;
+  ControlProblem problem_;
+  ControlVector delta_phi_;
+  std::string law_name_;
+
+  bool have_state_ = false;
+  bool obeyed_ = false;
+  bool activated_ = false;
+  bool law_for_point_ = true;        ///< the law was built for a point target
+  ControlVector applied_phi_;
+  uint64_t last_answered_sample_ = 0;  ///< of this controller's latest command
+  uint64_t last_sample_ = 0;
+  int64_t last_sample_ns_ = 0;
+  uint64_t sequence_ = 0;
+  uint64_t target_revision_ = 0;
+
+  // Status.
+  std::string condition_ = "waiting for the device description";
+  double error_deg_ = NAN;
+  double sigma_max_ = NAN, sigma_min_ = NAN;
+  uint64_t updates_ = 0, failed_updates_ = 0, rejected_samples_ = 0;
+  uint64_t interval_updates_ = 0, interval_nullspace_ = 0;
+  double interval_compute_s_ = 0.0, interval_compute_max_s_ = 0.0;
+  std::string last_rejection_;
+};
+
+}  // namespace dpc::services

@@ -1,0 +1,133 @@
+// dpc-controller: a Jacobian controller. Configures itself from the bus (device description,
+// target), answers every polarimeter sample with a command, follows the applied φ while another
+// controller is obeyed (bumpless takeover), and publishes its status.
+//
+//   dpc-controller [SCENARIO] [--id ID] [--priority P] [--method gp] [--step 0.5] …
+
+#include <mutex>
+
+#include <spdlog/spdlog.h>
+
+#include "controller_core.h"
+#include "dpc/bus/bus_participant.h"
+#include "dpc/bus/wall_clock.h"
+#include "dpc/config/scenario_error.h"
+#include "service_runtime.h"
+
+namespace dpc::services {
+namespace {
+
+int Run(int argc, char** argv) {
+  ShutdownSignals signals;
+  CLI::App app{"dpc-controller: a Jacobian polarization controller on the bench's DDS bus"};
+  CommonOptions common;
+  AddCommonOptions(app, &common);
+  ControllerSettings settings;
+  app.add_option("--id", settings.controller_id, "Controller id (unique on the bench)")
+      ->check([](const std::string& id) -> std::string {
+        return id.empty() || id.size() > 63 ? "controller id must have 1 to 63 characters" : "";
+      })
+      ->capture_default_str();
+  app.add_option("--priority", settings.priority,
+                 "The driver obeys the alive controller of highest priority")
+      ->capture_default_str();
+  app.add_option("--freeze-after-s", settings.freeze_after_s,
+                 "A gap in the samples longer than this freezes the loop; it re-joins from the "
+                 "applied φ when samples resume")
+      ->check(CLI::Range(1e-4, 60.0))->capture_default_str();
+  double status_period_s = 0.02;
+  app.add_option("--status-period-s", status_period_s, "Status publication period")
+      ->check(CLI::Range(1e-3, 10.0))->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  settings.bench_id = common.bench_id;
+  SetUpLogging("controller " + settings.controller_id, common);
+  try {
+    const ScenarioConfig scenario = LoadServiceScenario(common);
+    settings.controller = scenario.controller;
+    settings.simulation = scenario.simulation;
+  } catch (const ScenarioError& e) {
+    spdlog::error("{}", DescribeError(e, common));
+    return kExitInvalidInput;
+  }
+
+  try {
+    ControllerCore core(settings);
+    std::mutex mutex;
+    bus::BusParticipant participant({common.domain_id, "dpc-controller/" + settings.controller_id});
+    auto command_writer = participant.MakeWriter<msg::WaveplateCommand>();
+    auto status_writer = participant.MakeWriter<msg::ControllerStatus>();
+    auto devices = participant.MakeReader<msg::DeviceDescription>(
+        common.bench_id, [&](const msg::DeviceDescription& description, const auto&) {
+          std::lock_guard<std::mutex> lock(mutex);
+          if (std::string error = core.OnDevice(description); !error.empty()) {
+            spdlog::error("{}", error);
+          } else {
+            spdlog::info("device: {} stages from driver {}", description.stages().size(),
+                         description.driver_id().to_string());
+          }
+        });
+    auto targets = participant.MakeReader<msg::Target>(
+        common.bench_id, [&](const msg::Target& target, const auto&) {
+          std::lock_guard<std::mutex> lock(mutex);
+          if (std::string error = core.OnTarget(target); !error.empty()) {
+            spdlog::error("{}", error);
+          } else {
+            spdlog::info("target revision {}", target.revision());
+          }
+        });
+    auto states = participant.MakeReader<msg::WaveplateState>(
+        common.bench_id, [&](const msg::WaveplateState& state, const auto&) {
+          std::lock_guard<std::mutex> lock(mutex);
+          core.OnState(state);
+        });
+    uint64_t reported_rejections = 0;
+    std::unique_ptr<bus::Reader<msg::StokesSample>> samples;
+    samples = participant.MakeReader<msg::StokesSample>(
+        common.bench_id, [&](const msg::StokesSample& sample, const auto&) {
+          const int64_t wall_ns = bus::WallClockNs();
+          std::lock_guard<std::mutex> lock(mutex);
+          if (auto command = core.OnSample(sample, bus::MonotonicNs(), wall_ns)) {
+            command_writer->Write(*command);
+          }
+          if (core.rejected_samples() != reported_rejections) {
+            if (reported_rejections == 0 || core.rejected_samples() % 1000 == 0) {
+              spdlog::warn("rejected sample #{}: {}", core.rejected_samples(), core.last_rejection());
+            }
+            reported_rejections = core.rejected_samples();
+          }
+        });
+    spdlog::info("law {}, priority {}, profiles {}, domain {}",
+                 MethodName(settings.controller.method), settings.priority,
+                 participant.profiles_file(), common.domain_id);
+    std::string last_condition;
+    const auto period = std::chrono::milliseconds(static_cast<int64_t>(status_period_s * 1000));
+    while (!signals.Wait(period)) {
+      std::lock_guard<std::mutex> lock(mutex);
+      const msg::ControllerStatus status = core.TakeStatus(
+          bus::MonotonicNs(), bus::WallClockNs(), samples->counters().deadline_misses.load());
+      status_writer->Write(status);
+      if (status.condition() != last_condition) {
+        last_condition = status.condition();
+        spdlog::info("{}{}", last_condition, status.obeyed() ? " (obeyed)" : "");
+      }
+    }
+    samples.reset();
+    states.reset();
+    targets.reset();
+    devices.reset();
+    spdlog::info("stopping on signal {}", signals.signal());
+  } catch (const bus::BusError& e) {
+    spdlog::error("{}", e.what());
+    return kExitRuntimeError;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+}  // namespace dpc::services
+
+int main(int argc, char** argv) { return dpc::services::Run(argc, argv); }

@@ -1,0 +1,204 @@
+#include "driver_core.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "dpc/bus/message_conversion.h"
+#include "dpc/config/scenario_builders.h"
+
+namespace dpc::services {
+namespace {
+
+constexpr double kIntervalSmoothing = 0.05;   ///< weight of a new interval in the average
+constexpr size_t kMaxControllers = 64;        ///< records kept; the longest-silent is dropped
+
+}  // namespace
+
+DriverCore::DriverCore(std::vector<StageConfig> stages, DriverSettings settings,
+                       WaveplateBackend* backend)
+    : chain_(BuildChain(stages)),
+      settings_(std::move(settings)),
+      backend_(backend),
+      applied_(backend->Applied()),
+      saturated_(static_cast<size_t>(chain_.control_count()), false) {
+  reason_ = "holding: no controller yet";
+}
+
+int64_t DriverCore::SilenceTimeoutNs(const ControllerRecord& record) const {
+  const double floor_ns = settings_.min_silence_s * 1e9;
+  return static_cast<int64_t>(std::max(floor_ns, settings_.silence_intervals * record.mean_interval_ns));
+}
+
+bool DriverCore::Alive(const ControllerRecord& record, int64_t now_ns) const {
+  return record.commands > 0 && now_ns - record.last_command_ns <= SilenceTimeoutNs(record);
+}
+
+std::string DriverCore::BestAlive(int64_t now_ns, const std::string& excluded) const {
+  std::string best;
+  int32_t best_priority = 0;
+  for (const auto& [id, record] : controllers_) {
+    if (id == excluded || !Alive(record, now_ns)) continue;
+    if (best.empty() || record.priority > best_priority) {
+      best = id;
+      best_priority = record.priority;
+    }
+  }
+  return best;
+}
+
+void DriverCore::Obey(const std::string& id, const std::string& reason) {
+  if (id != obeyed_) ++switches_;
+  obeyed_ = id;
+  reason_ = reason;
+}
+
+void DriverCore::Hold(const std::string& reason) {
+  obeyed_.clear();
+  reason_ = reason;
+}
+
+void DriverCore::Reject(const std::string& controller_id, const std::string& reason) {
+  ++rejected_;
+  last_rejection_ = fmt::format("from {}: {}", controller_id.empty() ? "?" : controller_id, reason);
+}
+
+std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCommand& command,
+                                                         int64_t now_ns, int64_t wall_ns) {
+  const std::string id = command.controller_id().to_string();
+  if (std::string reason = bus::CheckCommandShape(command, chain_.control_count()); !reason.empty()) {
+    Reject(id, reason);
+    if (id != obeyed_) return std::nullopt;
+    // The obeyed controller's bad command: keep φ, but answer the sample (a lockstep bench
+    // waits for it) and say why nothing changed.
+    answers_sample_ = command.answers_sample();
+    sample_time_ns_ = command.sample_time_ns();
+    sample_publish_time_ns_ = command.sample_publish_time_ns();
+    command_receive_time_ns_ = wall_ns;
+    std::fill(saturated_.begin(), saturated_.end(), false);
+    return Publishable(wall_ns);
+  }
+
+  // Liveness and priority of this controller.
+  auto found = controllers_.find(id);
+  if (found == controllers_.end()) {
+    if (controllers_.size() >= kMaxControllers) {
+      auto oldest = std::min_element(controllers_.begin(), controllers_.end(),
+                                     [](const auto& a, const auto& b) {
+                                       return a.second.last_command_ns < b.second.last_command_ns;
+                                     });
+      if (oldest->first != obeyed_) controllers_.erase(oldest);
+    }
+    found = controllers_.emplace(id, ControllerRecord{}).first;
+  }
+  ControllerRecord& record = found->second;
+  if (record.commands > 0) {
+    const double interval = static_cast<double>(now_ns - record.last_command_ns);
+    record.mean_interval_ns = record.commands == 1
+                                  ? interval
+                                  : (1.0 - kIntervalSmoothing) * record.mean_interval_ns +
+                                        kIntervalSmoothing * interval;
+  }
+  record.priority = command.priority();
+  record.last_command_ns = now_ns;
+  ++record.commands;
+
+  if (id != obeyed_) {
+    const auto current = controllers_.find(obeyed_);
+    const bool current_alive = current != controllers_.end() && Alive(current->second, now_ns);
+    if (current_alive && current->second.priority >= record.priority) return std::nullopt;
+    Obey(id, current_alive ? fmt::format("obeying {} (priority {} over {})", id, record.priority,
+                                         obeyed_)
+                           : fmt::format("obeying {} (priority {})", id, record.priority));
+  }
+
+  // Apply: clamp to the ranges, then limit the slew over the bench time since the last command.
+  ControlVector phi(chain_.control_count());
+  for (int i = 0; i < chain_.control_count(); ++i) phi[i] = command.phi()[static_cast<size_t>(i)];
+  bool limited = false;
+  const double max_step =
+      settings_.max_slew_per_s > 0.0 && applied_any_
+          ? settings_.max_slew_per_s *
+                std::max(0.0, static_cast<double>(command.sample_time_ns() -
+                                                  last_applied_sample_time_ns_) * 1e-9)
+          : INFINITY;
+  for (int i = 0; i < chain_.control_count(); ++i) {
+    double value = phi[i];
+    if (const auto& range = chain_.controls()[static_cast<size_t>(i)].range) value = range->Clamp(value);
+    value = std::clamp(value, applied_[i] - max_step, applied_[i] + max_step);
+    saturated_[static_cast<size_t>(i)] = value != phi[i];
+    limited = limited || value != phi[i];
+    phi[i] = value;
+  }
+  if (std::string failure = backend_->Apply(phi); !failure.empty()) {
+    Reject(id, fmt::format("backend {} failed: {}", backend_->name(), failure));
+    Hold(fmt::format("holding: backend {} failed: {}", backend_->name(), failure));
+    return Publishable(wall_ns);
+  }
+  applied_ = backend_->Applied();
+  applied_any_ = true;
+  last_applied_sample_time_ns_ = command.sample_time_ns();
+  ++applied_count_;
+  if (limited) ++limited_;
+  answers_sample_ = command.answers_sample();
+  sample_time_ns_ = command.sample_time_ns();
+  sample_publish_time_ns_ = command.sample_publish_time_ns();
+  command_receive_time_ns_ = wall_ns;
+  return Publishable(wall_ns);
+}
+
+std::optional<msg::WaveplateState> DriverCore::Tick(int64_t now_ns, int64_t wall_ns) {
+  if (!obeyed_.empty()) {
+    const ControllerRecord& record = controllers_.at(obeyed_);
+    if (Alive(record, now_ns)) return std::nullopt;
+    const double silent_ms = static_cast<double>(now_ns - record.last_command_ns) * 1e-6;
+    const std::string silent = obeyed_;
+    const std::string next = BestAlive(now_ns, silent);
+    std::fill(saturated_.begin(), saturated_.end(), false);
+    if (!next.empty()) {
+      Obey(next, fmt::format("obeying {} (priority {}): {} silent for {:.2f} ms", next,
+                             controllers_.at(next).priority, silent, silent_ms));
+    } else {
+      Hold(fmt::format("holding: {} silent for {:.2f} ms, no other controller", silent, silent_ms));
+    }
+    return Publishable(wall_ns);
+  }
+  // Holding: a controller that became alive is obeyed on its next command; the heartbeat keeps
+  // the state topic within its deadline and tells late joiners the applied φ.
+  if (static_cast<double>(now_ns - last_state_ns_) >= settings_.holding_state_period_s * 1e9) {
+    last_state_ns_ = now_ns;
+    return Publishable(wall_ns);
+  }
+  return std::nullopt;
+}
+
+msg::WaveplateState DriverCore::State(int64_t wall_ns) const {
+  msg::WaveplateState state;
+  state.bench_id(settings_.bench_id);
+  state.sequence_number(sequence_);
+  state.answers_sample(answers_sample_);
+  state.sample_time_ns(sample_time_ns_);
+  state.sample_publish_time_ns(sample_publish_time_ns_);
+  state.command_receive_time_ns(command_receive_time_ns_);
+  state.publish_time_ns(wall_ns);
+  state.phi_applied().assign(applied_.data(), applied_.data() + applied_.size());
+  state.saturated().assign(saturated_.begin(), saturated_.end());
+  state.mode(obeyed_.empty() ? msg::DRIVER_HOLDING : msg::DRIVER_ACTIVE);
+  state.reason(reason_.substr(0, 255));
+  state.obeyed_controller_id(obeyed_);
+  state.obeyed_priority(obeyed_.empty() ? 0 : controllers_.at(obeyed_).priority);
+  state.commands_applied(applied_count_);
+  state.commands_rejected(rejected_);
+  state.commands_limited(limited_);
+  state.controller_switches(switches_);
+  state.last_rejection(last_rejection_.substr(0, 255));
+  return state;
+}
+
+msg::WaveplateState DriverCore::Publishable(int64_t wall_ns) {
+  ++sequence_;
+  return State(wall_ns);
+}
+
+}  // namespace dpc::services

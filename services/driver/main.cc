@@ -1,0 +1,169 @@
+// dpc-driver: the waveplate driver. Obeys one controller (priority, liveness), validates,
+// clamps and slew-limits its commands, applies them to the backend (the simulated device) and
+// publishes the state; owns the device description and the target on the bus.
+//
+//   dpc-driver [SCENARIO] [--domain N] [--bench-id ID] [--max-slew-per-s X] [--min-silence-s T]
+
+#include <atomic>
+#include <mutex>
+#include <thread>
+
+#include <spdlog/spdlog.h>
+
+#include "driver_core.h"
+#include "dpc/bus/bus_participant.h"
+#include "dpc/bus/message_conversion.h"
+#include "dpc/bus/wall_clock.h"
+#include "dpc/config/scenario_builders.h"
+#include "dpc/config/scenario_error.h"
+#include "dpc/config/scenario_validation.h"
+#include "service_runtime.h"
+
+namespace dpc::services {
+namespace {
+
+int Run(int argc, char** argv) {
+  ShutdownSignals signals;
+  CLI::App app{"dpc-driver: the bench's waveplate driver (obeys one controller, publishes the state)"};
+  CommonOptions common;
+  AddCommonOptions(app, &common);
+  DriverSettings settings;
+  app.add_option("--id", settings.driver_id, "Driver id")->capture_default_str();
+  app.add_option("--max-slew-per-s", settings.max_slew_per_s,
+                 "Slew-rate limit of every control, φ units per second of bench time (0: none)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  app.add_option("--min-silence-s", settings.min_silence_s,
+                 "A controller silent this long (or --silence-intervals of its command interval, "
+                 "if longer) is dead: fail over or hold")
+      ->check(CLI::Range(1e-4, 10.0))->capture_default_str();
+  app.add_option("--silence-intervals", settings.silence_intervals,
+                 "Silence timeout in command intervals")
+      ->check(CLI::Range(2.0, 1000.0))->capture_default_str();
+  double tick_s = 2.5e-4;
+  app.add_option("--tick-s", tick_s, "How often the driver checks for silent controllers")
+      ->check(CLI::Range(1e-5, 0.1))->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  settings.bench_id = common.bench_id;
+  SetUpLogging("driver", common);
+
+  ScenarioConfig scenario;
+  ControlVector initial_phi;
+  try {
+    scenario = LoadServiceScenario(common);
+    ValidateDeviceStages(scenario.stages);
+    ValidateTargetConfig(scenario.target);
+    const int controls = ScenarioControlCount(scenario.stages);
+    if (!scenario.controller.initial_phi.empty() &&
+        scenario.controller.initial_phi.size() != static_cast<size_t>(controls)) {
+      throw ScenarioError("controller.initial_phi",
+                          fmt::format("has {} values, the device has {} controls",
+                                      scenario.controller.initial_phi.size(), controls));
+    }
+    initial_phi = BuildInitialPhi(scenario.controller, controls);
+    BuildChain(scenario.stages).ClampToRanges(&initial_phi);
+  } catch (const ScenarioError& e) {
+    spdlog::error("invalid scenario: {}", e.what());
+    return kExitInvalidInput;
+  }
+
+  try {
+    SimulatedWaveplates backend(initial_phi);
+    DriverCore core(scenario.stages, settings, &backend);
+    std::mutex mutex;
+    bus::BusParticipant participant({common.domain_id, "dpc-driver/" + common.bench_id});
+    auto state_writer = participant.MakeWriter<msg::WaveplateState>();
+    auto device_writer = participant.MakeWriter<msg::DeviceDescription>();
+    auto target_writer = participant.MakeWriter<msg::Target>();
+    auto reply_writer = participant.MakeWriter<msg::TargetReply>();
+    device_writer->Write(bus::DescribeDevice(scenario.stages, common.bench_id, settings.driver_id,
+                                             settings.max_slew_per_s));
+    uint64_t target_revision = 1;
+    target_writer->Write(bus::TargetMessage(scenario.target, common.bench_id, target_revision, ""));
+
+    std::string last_reason;
+    auto publish = [&](const msg::WaveplateState& state) {
+      state_writer->Write(state);
+      if (state.reason() != last_reason) {
+        last_reason = state.reason();
+        if (state.mode() == msg::DRIVER_HOLDING) {
+          spdlog::warn("{}", last_reason);
+        } else {
+          spdlog::info("{}", last_reason);
+        }
+      }
+    };
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      publish(core.State(bus::WallClockNs()));
+    }
+    uint64_t reported_rejections = 0;
+    auto commands = participant.MakeReader<msg::WaveplateCommand>(
+        common.bench_id, [&](const msg::WaveplateCommand& command, const auto&) {
+          const int64_t wall_ns = bus::WallClockNs();
+          std::lock_guard<std::mutex> lock(mutex);
+          if (auto state = core.OnCommand(command, bus::MonotonicNs(), wall_ns)) publish(*state);
+          if (core.commands_rejected() != reported_rejections) {
+            // Log the first rejection and then one in a thousand: a flood must not stall the loop.
+            if (reported_rejections == 0 || core.commands_rejected() % 1000 == 0) {
+              spdlog::warn("rejected command #{}: {}", core.commands_rejected(), core.last_rejection());
+            }
+            reported_rejections = core.commands_rejected();
+          }
+        });
+    auto requests = participant.MakeReader<msg::TargetRequest>(
+        common.bench_id, [&](const msg::TargetRequest& request, const auto&) {
+          msg::TargetReply reply;
+          reply.bench_id(common.bench_id);
+          reply.request_id(request.request_id());
+          try {
+            const TargetConfig target = bus::TargetFromRequest(request);
+            std::lock_guard<std::mutex> lock(mutex);
+            ++target_revision;
+            target_writer->Write(bus::TargetMessage(target, common.bench_id, target_revision,
+                                                    request.request_id().to_string()));
+            reply.accepted(true);
+            reply.revision(target_revision);
+            reply.message("target revision " + std::to_string(target_revision));
+            spdlog::info("target revision {} (request {})", target_revision,
+                         request.request_id().to_string());
+          } catch (const std::exception& e) {
+            reply.accepted(false);
+            reply.message(std::string(e.what()).substr(0, 255));
+            spdlog::warn("refused target request {}: {}", request.request_id().to_string(), e.what());
+          }
+          reply_writer->Write(reply);
+        });
+
+    std::atomic<bool> stop{false};
+    std::thread ticker([&] {
+      const auto period = std::chrono::duration<double>(tick_s);
+      while (!stop.load()) {
+        std::this_thread::sleep_for(period);
+        std::lock_guard<std::mutex> lock(mutex);
+        if (auto state = core.Tick(bus::MonotonicNs(), bus::WallClockNs())) publish(*state);
+      }
+    });
+    spdlog::info("{} controls, profiles {}, domain {}", core.control_count(),
+                 participant.profiles_file(), common.domain_id);
+    while (!signals.Wait(std::chrono::milliseconds(500))) {
+    }
+    stop = true;
+    ticker.join();
+    commands.reset();
+    requests.reset();
+    spdlog::info("stopping on signal {}", signals.signal());
+  } catch (const bus::BusError& e) {
+    spdlog::error("{}", e.what());
+    return kExitRuntimeError;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+}  // namespace dpc::services
+
+int main(int argc, char** argv) { return dpc::services::Run(argc, argv); }

@@ -1,0 +1,96 @@
+#pragma once
+// The simulated optical bench behind the polarimeter service: the input SOP (the scenario's
+// disturbances), the waveplates' optics (S_out = f(φ_applied; S_in), φ_applied from the
+// driver's state), the polarimeters' noise and the run statistics. Two clocks:
+//
+// Lockstep (simulated time). Sample k: input, plant, statistics as in `dpc sim`; from the
+// activation sample on, the sample is published and the bench waits for the driver's state
+// that answers it; that φ acts from sample k + D (D = the scenario's loop delay in samples),
+// through the same delay line as the simulator. Same random streams, same order: a lockstep
+// run across processes reproduces `dpc sim` on the same scenario and seed, trajectory for
+// trajectory (tests/process). Before activation nothing is published, as in the simulator.
+//
+// Real time (wall clock). Every 1/rate_hz the input advances by one sample period (the
+// scenario's input runs at rate_hz), S_out comes from the latest state received, and the
+// sample is published; the loop delay is what the processes and DDS take.
+//
+// DDS-free: the service's main.cc connects it to the bus through BenchLink.
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "dpc/config/scenario_config.h"
+#include "dpc/control/target.h"
+#include "dpc/msg/bench.h"
+#include "dpc/optics/waveplate_chain.h"
+#include "dpc/sim/closed_loop_simulator.h"
+
+namespace dpc::services {
+
+/// How the bench reaches the rest of the loop.
+class BenchLink {
+ public:
+  virtual ~BenchLink() = default;
+  virtual void Publish(const msg::StokesSample& sample) = 0;
+  /// Lockstep: waits for the applied φ of the state answering `sequence` (the link re-publishes
+  /// the sample if no answer comes, e.g. before a controller matched). nullopt: stop (signal or
+  /// timeout; `why` says which).
+  virtual std::optional<ControlVector> AwaitAnswer(const msg::StokesSample& sample, std::string* why) = 0;
+  /// Real time: the latest applied φ (nullopt until a valid state arrived).
+  virtual std::optional<ControlVector> LatestApplied() = 0;
+  /// Real time: the latest accepted target, if it changed since the last call.
+  virtual std::optional<TargetConfig> TargetChange() = 0;
+  virtual bool stop_requested() = 0;
+};
+
+struct BenchSettings {
+  std::string bench_id = "bench1";
+  bool lockstep = false;
+  double rate_hz = 10e3;           ///< real time
+  double duration_s = 0.0;         ///< real time: 0 runs until stopped
+  double settle_s = 0.5;           ///< real time: statistics from this long after the first lock
+};
+
+struct BenchReport {
+  SimulationResult result;
+  int64_t samples = 0;
+  int64_t published = 0;
+  int64_t overruns = 0;            ///< real time: sample periods the loop came late for
+  double achieved_rate_hz = 0.0;
+  std::string stop_reason;
+};
+
+class BenchCore {
+ public:
+  /// `scenario` is validated here (ValidateScenario). Throws ScenarioError.
+  BenchCore(ScenarioConfig scenario, BenchSettings settings);
+  ~BenchCore();
+
+  /// Runs until the scenario's duration (lockstep), --duration-s (real time) or a stop.
+  /// `observer` gets every sample (traces) and progress, as in ClosedLoopSimulator::Run.
+  BenchReport Run(BenchLink* link, SimulationObserver* observer);
+
+  const ScenarioConfig& scenario() const { return scenario_; }
+  const WaveplateChain& chain() const { return *chain_; }
+  int control_count() const { return chain_->control_count(); }
+  /// Whether `phi` (from a state) fits the device: one finite value per control.
+  std::string CheckApplied(const msg::WaveplateState& state) const;
+
+ private:
+  BenchReport RunLockstep(BenchLink* link, SimulationObserver* observer);
+  BenchReport RunRealTime(BenchLink* link, SimulationObserver* observer);
+  msg::StokesSample MakeSample(uint64_t sequence, int64_t sample_time_ns, const StokesVector& s_in,
+                               const StokesVector& s_out) const;
+
+  ScenarioConfig scenario_;
+  BenchSettings settings_;
+  std::unique_ptr<WaveplateChain> chain_;
+  std::unique_ptr<Target> target_;
+  ControlVector initial_phi_;
+};
+
+}  // namespace dpc::services
