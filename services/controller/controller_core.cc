@@ -96,17 +96,25 @@ void ControllerCore::OnState(const msg::WaveplateState& state) {
     Resync(applied_phi_);
     return;
   }
-  const bool answers_latest = state.answers_sample() >= last_answered_sample_;
-  if (!obeyed_ && (answers_latest || last_answered_sample_ == 0)) {
-    Resync(applied_phi_);
-  } else if (obeyed_ && state.answers_sample() == last_answered_sample_) {
-    for (bool limited : state.saturated()) {
-      if (limited) {
-        Resync(applied_phi_);  // the driver clamped our latest command: no wind-up
-        break;
+  if (obeyed_) {
+    if (state.answers_sample() == last_answered_sample_) {
+      for (bool limited : state.saturated()) {
+        if (limited) {
+          Resync(applied_phi_);  // the driver clamped our latest command: no wind-up
+          break;
+        }
       }
     }
+    return;
   }
+  // Not obeyed: follow what is applied, so that the first obeyed command continues from there.
+  // One exception keeps a lockstep run exact: a holding heartbeat the driver sent before it saw
+  // our latest command (it answers an older sample) must not undo that command. In real time
+  // such a race costs at most one step, and following every heartbeat matters more (a
+  // controller whose commands have not reached the driver yet must not drift on its own).
+  const bool stale_heartbeat = state.mode() == msg::DRIVER_HOLDING && lockstep_ &&
+                               state.answers_sample() < last_answered_sample_;
+  if (!stale_heartbeat) Resync(applied_phi_);
 }
 
 void ControllerCore::RejectSample(std::string reason) {
@@ -131,6 +139,7 @@ std::optional<msg::WaveplateCommand> ControllerCore::OnSample(const msg::StokesS
   }
   last_sample_ = sample.sequence_number();
   last_sample_ns_ = now_ns;
+  lockstep_ = sample.lockstep();
 
   const auto start = std::chrono::steady_clock::now();
   if (!activated_) {

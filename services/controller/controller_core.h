@@ -9,8 +9,8 @@
 //
 // Bumpless joining and switching: while the driver obeys another controller (or holds), this
 // one follows the applied φ from the driver's state: its integrator is reset to phi_applied of
-// each state that answers a sample at least as new as its own latest command. Its commands are
-// then "applied φ + Δφ", so the moment the driver obeys it nothing jumps. Once obeyed, it
+// every state (see OnState for the one exception). Its commands are then "applied φ + Δφ", so
+// the moment the driver obeys it nothing jumps. Once obeyed, it
 // integrates its own commands (paper eq. 6), as `dpc sim` does; if the driver reports that it
 // limited this controller's latest command, the integrator takes the applied φ (no wind-up).
 //
@@ -85,6 +85,7 @@ class ControllerCore {
   bool have_state_ = false;
   bool obeyed_ = false;
   bool activated_ = false;
+  bool lockstep_ = false;            ///< the latest sample came from a lockstep bench
   bool law_for_point_ = true;        ///< the law was built for a point target
   ControlVector applied_phi_;
   uint64_t last_answered_sample_ = 0;  ///< of this controller's latest command
