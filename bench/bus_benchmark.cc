@@ -1,0 +1,369 @@
+// dpc_bus_benchmark: the bench's figures over Fast DDS (issue 3, item 10), each beside a raw
+// Fast DDS reference measured by the same harness in the same run. Starts the real services
+// (build/services/dpc-*) on a loopback domain of its own, prints figures, never asserts.
+//
+//   dpc_bus_benchmark            full run (~20 min: 60 s per rate, a 10-minute memory run)
+//   dpc_bus_benchmark --quick    the same figures from short runs (~3 min)
+//
+// Sections:
+//   raw      ping-pong: StokesSample out, WaveplateState back, the bench's QoS profiles, between
+//            two processes; one hop = round trip / 2
+//   loop     lockstep bench: sample published → command received at the driver (two hops:
+//            polarimeter → controller → driver, plus the controller's update) and → state
+//            published; per hop = (sample → command at the driver) / 2
+//   rate     real time at 5, 10, 15, 20 kHz: overruns and missed deadlines over the run
+//   failover kill -9 of the obeyed controller with a standby: gap between the last command of
+//            the killed one and the first of the standby applied by the driver
+//   tracking real time at 10 kHz, the scrambler at increasing rates: mean error
+//   memory   RSS of each service at the start and the end of a long 10 kHz run
+
+#include <signal.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "dpc/bus/bus_participant.h"
+#include "dpc/bus/wall_clock.h"
+#include "support/child_process.h"
+
+namespace dpc {
+namespace {
+
+using testing::ChildProcess;
+using testing::WaitUntil;
+using namespace std::chrono_literals;
+
+struct Percentiles {
+  double p50 = NAN, p99 = NAN, p999 = NAN, max = NAN;
+  size_t count = 0;
+};
+
+Percentiles Summarize(std::vector<double> v) {
+  Percentiles p;
+  p.count = v.size();
+  if (v.empty()) return p;
+  std::sort(v.begin(), v.end());
+  auto at = [&](double q) { return v[std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())))]; };
+  p.p50 = at(0.5);
+  p.p99 = at(0.99);
+  p.p999 = at(0.999);
+  p.max = v.back();
+  return p;
+}
+
+std::string Us(const Percentiles& p) {
+  return fmt::format("p50 {:7.1f} µs  p99 {:7.1f} µs  p99.9 {:7.1f} µs  (n = {})", p.p50 * 1e-3,
+                     p.p99 * 1e-3, p.p999 * 1e-3, p.count);
+}
+
+std::string g_dir;
+int g_domain = 30;
+
+class Services {
+ public:
+  ChildProcess& Start(const std::string& binary, std::vector<std::string> args, const std::string& name) {
+    args.insert(args.begin(), binary);
+    args.insert(args.end(), {"--domain", std::to_string(g_domain), "--log-level", "warn"});
+    processes_.push_back(std::make_unique<ChildProcess>(args, g_dir + "/" + name + ".log"));
+    return *processes_.back();
+  }
+  ChildProcess& Driver() { return Start(DPC_DRIVER_BINARY, {}, "driver"); }
+  ChildProcess& Controller(const std::string& id, int priority) {
+    return Start(DPC_CONTROLLER_BINARY, {"--id", id, "--priority", std::to_string(priority)}, "controller_" + id);
+  }
+  ChildProcess& Polarimeter(std::vector<std::string> args) {
+    return Start(DPC_POLARIMETER_BINARY, std::move(args), "polarimeter");
+  }
+  void StopAll() { processes_.clear(); }
+
+ private:
+  std::vector<std::unique_ptr<ChildProcess>> processes_;
+};
+
+nlohmann::json LastJsonLine(const std::string& log) {
+  std::istringstream in(log);
+  std::string line, last;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line[0] == '{') last = line;
+  }
+  return last.empty() ? nlohmann::json() : nlohmann::json::parse(last, nullptr, false);
+}
+
+// ---- raw ping-pong -------------------------------------------------------------------------
+
+int RunPong() {
+  bus::BusParticipant participant({g_domain, "dpc-bench-pong"});
+  auto writer = participant.MakeWriter<msg::WaveplateState>();
+  msg::WaveplateState reply;
+  reply.phi_applied({0.0, 0.0, 0.0});
+  reply.saturated({false, false, false});
+  auto reader = participant.MakeReader<msg::StokesSample>("", [&](const msg::StokesSample& s, const auto&) {
+    reply.bench_id(s.bench_id());
+    reply.answers_sample(s.sequence_number());
+    reply.sample_publish_time_ns(s.publish_time_ns());
+    writer->Write(reply);
+  });
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  int sig = 0;
+  sigwait(&set, &sig);
+  reader.reset();
+  return 0;
+}
+
+Percentiles RawPingPong(const std::string& self, int count) {
+  sigset_t set;
+  ChildProcess pong({self, "--pong", "--domain", std::to_string(g_domain)}, g_dir + "/pong.log");
+  bus::BusParticipant participant({g_domain, "dpc-bench-ping"});
+  auto writer = participant.MakeWriter<msg::StokesSample>();
+  std::mutex mutex;
+  std::condition_variable answered;
+  uint64_t last_answer = 0;
+  std::vector<double> rtt_ns;
+  auto reader = participant.MakeReader<msg::WaveplateState>("", [&](const msg::WaveplateState& s, const auto&) {
+    const int64_t now = bus::WallClockNs();
+    std::lock_guard<std::mutex> lock(mutex);
+    if (s.answers_sample() > last_answer) {
+      last_answer = s.answers_sample();
+      rtt_ns.push_back(static_cast<double>(now - s.sample_publish_time_ns()));
+      answered.notify_one();
+    }
+  });
+  WaitUntil([&] { return writer->matched_readers() > 0 && reader->counters().matched_writers.load() > 0; }, 20s);
+  std::this_thread::sleep_for(200ms);
+  msg::StokesSample sample;
+  sample.bench_id("bench1");
+  sample.s_in({1, 0, 0});
+  sample.s_out({1, 0, 0});
+  for (int i = 1; i <= count; ++i) {
+    sample.sequence_number(static_cast<uint64_t>(i));
+    sample.publish_time_ns(bus::WallClockNs());
+    writer->Write(sample);
+    std::unique_lock<std::mutex> lock(mutex);
+    answered.wait_for(lock, 100ms, [&] { return last_answer >= static_cast<uint64_t>(i); });
+  }
+  reader.reset();
+  (void)set;
+  std::vector<double> hops;
+  for (double r : rtt_ns) hops.push_back(r / 2.0);
+  return Summarize(hops);
+}
+
+// ---- observing the bench -------------------------------------------------------------------
+
+struct StateLog {
+  std::mutex mutex;
+  std::vector<msg::WaveplateState> states;
+  std::unique_ptr<bus::BusParticipant> participant;
+  std::unique_ptr<bus::Reader<msg::WaveplateState>> reader;
+  StateLog() {
+    participant = std::make_unique<bus::BusParticipant>(bus::BusOptions{g_domain, "dpc-bench-observer"});
+    reader = participant->MakeReader<msg::WaveplateState>("bench1", [this](const msg::WaveplateState& s, const auto&) {
+      std::lock_guard<std::mutex> lock(mutex);
+      states.push_back(s);
+    });
+  }
+  ~StateLog() {
+    reader.reset();
+    participant.reset();
+  }
+  size_t AppliedBy(const std::string& id) {
+    std::lock_guard<std::mutex> lock(mutex);
+    size_t n = 0;
+    for (const auto& s : states) n += s.answers_sample() > 0 && s.obeyed_controller_id().to_string() == id;
+    return n;
+  }
+};
+
+void LoopLatency(double seconds, const Percentiles& raw) {
+  StateLog log;
+  Services services;
+  services.Driver();
+  services.Controller("A", 0);
+  ChildProcess& polarimeter = services.Polarimeter({"--lockstep", "--duration-s", fmt::format("{}", seconds), "--json"});
+  polarimeter.Wait(std::chrono::seconds(static_cast<int64_t>(600)));
+  std::vector<double> to_driver, to_state;
+  {
+    std::lock_guard<std::mutex> lock(log.mutex);
+    for (const auto& s : log.states) {
+      if (s.answers_sample() == 0 || s.sample_publish_time_ns() == 0) continue;
+      to_driver.push_back(static_cast<double>(s.command_receive_time_ns() - s.sample_publish_time_ns()));
+      to_state.push_back(static_cast<double>(s.publish_time_ns() - s.sample_publish_time_ns()));
+    }
+  }
+  std::vector<double> per_hop;
+  for (double v : to_driver) per_hop.push_back(v / 2.0);
+  const Percentiles hop = Summarize(per_hop);
+  const nlohmann::json report = LastJsonLine(polarimeter.Log());
+  fmt::print("loop (lockstep, {:.0f} samples/s across the three processes)\n",
+             report.is_object() ? report["bench"]["achieved_rate_hz"].get<double>() : NAN);
+  fmt::print("  sample → command at driver      {}\n", Us(Summarize(to_driver)));
+  fmt::print("  sample → state published        {}\n", Us(Summarize(to_state)));
+  fmt::print("  per hop (→ driver / 2)          {}\n", Us(hop));
+  fmt::print("  raw Fast DDS hop (same run)     {}\n", Us(raw));
+  fmt::print("  ratio per hop / raw hop         p50 {:.2f}  p99 {:.2f}  p99.9 {:.2f}   (goal ≤ 1.1)\n",
+             hop.p50 / raw.p50, hop.p99 / raw.p99, hop.p999 / raw.p999);
+}
+
+void Rates(double seconds) {
+  fmt::print("real-time rate ({:.0f} s each; goal: ≥ 20 kHz held with zero missed deadlines)\n", seconds);
+  for (double rate : {5e3, 10e3, 15e3, 20e3}) {
+    Services services;
+    services.Driver();
+    ChildProcess& controller = services.Controller("A", 0);
+    std::this_thread::sleep_for(500ms);
+    ChildProcess& polarimeter = services.Polarimeter({"--rate-hz", fmt::format("{}", rate), "--run-s", fmt::format("{}", seconds), "--json"});
+    polarimeter.Wait(std::chrono::seconds(static_cast<int64_t>(seconds * 3 + 60)));
+    const nlohmann::json r = LastJsonLine(polarimeter.Log());
+    (void)controller;
+    if (!r.is_object()) {
+      fmt::print("  {:6.0f} Hz: no report ({})\n", rate, polarimeter.log_path());
+      continue;
+    }
+    const auto& b = r["bench"];
+    fmt::print("  {:6.0f} Hz: achieved {:8.1f} Hz, {} overruns (late periods), {} state deadline misses, "
+               "error mean {:.3f}°\n",
+               rate, b["achieved_rate_hz"].get<double>(), b["overruns"].get<int64_t>(),
+               b["state_deadline_misses"].get<int64_t>(), r["error_deg"]["mean"].is_null() ? NAN : r["error_deg"]["mean"].get<double>());
+  }
+}
+
+void Failover(int repetitions) {
+  fmt::print("failover after kill -9 of the obeyed controller (10 kHz; must ≤ 10 ms, aim ≤ 2 ms)\n");
+  std::vector<double> gaps_ms;
+  for (int r = 0; r < repetitions; ++r) {
+    StateLog log;
+    Services services;
+    services.Driver();
+    ChildProcess& primary = services.Controller("primary", 10);
+    services.Controller("standby", 0);
+    services.Polarimeter({"--rate-hz", "10000"});
+    if (!WaitUntil([&] { return log.AppliedBy("primary") > 5000; }, 30s)) {
+      fmt::print("  run {}: the primary did not take control\n", r + 1);
+      continue;
+    }
+    primary.Signal(SIGKILL);
+    const size_t before = log.AppliedBy("standby");
+    WaitUntil([&] { return log.AppliedBy("standby") > before + 1000; }, 10s);
+    std::lock_guard<std::mutex> lock(log.mutex);
+    int64_t last_primary = 0, first_standby = 0;
+    for (const auto& s : log.states) {
+      if (s.answers_sample() > 0 && s.obeyed_controller_id().to_string() == "primary") last_primary = s.command_receive_time_ns();
+    }
+    for (const auto& s : log.states) {
+      if (s.answers_sample() > 0 && s.obeyed_controller_id().to_string() == "standby" &&
+          s.command_receive_time_ns() > last_primary) {
+        first_standby = s.command_receive_time_ns();
+        break;
+      }
+    }
+    if (first_standby > 0) gaps_ms.push_back(static_cast<double>(first_standby - last_primary) * 1e-6);
+  }
+  std::sort(gaps_ms.begin(), gaps_ms.end());
+  std::string list;
+  for (double g : gaps_ms) list += fmt::format(" {:.2f}", g);
+  fmt::print("  gaps (ms):{}\n", list);
+  if (!gaps_ms.empty()) {
+    fmt::print("  median {:.2f} ms, worst {:.2f} ms; DDS reference: EXCLUSIVE ownership with a 10 ms "
+               "deadline switched after ~9.5 ms (../shared/FASTDDS-NOTES.md)\n",
+               gaps_ms[gaps_ms.size() / 2], gaps_ms.back());
+  }
+}
+
+void Tracking(double seconds) {
+  fmt::print("tracking in real time at 10 kHz (scrambler rate → mean error; goal ≥ 150 rad/s below 1°)\n");
+  double best = 0.0;
+  for (double rate : {20.0, 50.0, 100.0, 150.0, 200.0, 300.0, 500.0, 1000.0}) {
+    Services services;
+    services.Driver();
+    services.Controller("A", 0);
+    std::this_thread::sleep_for(500ms);
+    ChildProcess& polarimeter = services.Polarimeter({"--rate-hz", "10000", "--run-s", fmt::format("{}", seconds),
+                                                      "--rate-rad-per-s", fmt::format("{}", rate), "--json"});
+    polarimeter.Wait(std::chrono::seconds(static_cast<int64_t>(seconds * 3 + 60)));
+    const nlohmann::json r = LastJsonLine(polarimeter.Log());
+    const double mean = r.is_object() && !r["error_deg"]["mean"].is_null() ? r["error_deg"]["mean"].get<double>() : NAN;
+    fmt::print("  {:6.0f} rad/s: mean error {:.3f}°\n", rate, mean);
+    if (mean < 1.0) best = rate;
+  }
+  fmt::print("  largest rate tracked below 1° mean: {:.0f} rad/s\n", best);
+}
+
+double RssMb(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  }
+  return NAN;
+}
+
+void Memory(double seconds) {
+  fmt::print("memory at 10 kHz for {:.0f} s (goal: each service < 64 MB RSS, no growth)\n", seconds);
+  Services services;
+  ChildProcess& driver = services.Driver();
+  ChildProcess& controller = services.Controller("A", 0);
+  ChildProcess& polarimeter = services.Polarimeter({"--rate-hz", "10000"});
+  std::this_thread::sleep_for(10s);
+  const double start[3] = {RssMb(driver.pid()), RssMb(controller.pid()), RssMb(polarimeter.pid())};
+  const auto end_time = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds - 10.0);
+  int minute = 0;
+  while (std::chrono::steady_clock::now() < end_time) {
+    std::this_thread::sleep_for(1s);
+    if (++minute % 60 == 0) fmt::print(stderr, "  … {} s\n", minute + 10);
+  }
+  const double end[3] = {RssMb(driver.pid()), RssMb(controller.pid()), RssMb(polarimeter.pid())};
+  const char* names[3] = {"dpc-driver", "dpc-controller", "dpc-polarimeter"};
+  for (int i = 0; i < 3; ++i) {
+    fmt::print("  {:16s} RSS {:6.1f} MB at 10 s, {:6.1f} MB at {:.0f} s: growth {:+.2f} MB\n", names[i], start[i],
+               end[i], seconds, end[i] - start[i]);
+  }
+}
+
+}  // namespace
+}  // namespace dpc
+
+int main(int argc, char** argv) {
+  CLI::App app{"dpc_bus_benchmark: the bench's DDS figures beside raw Fast DDS references"};
+  bool quick = false, pong = false;
+  std::string only;
+  app.add_flag("--quick", quick, "Short runs (~3 min) instead of the full ones (~20 min)");
+  app.add_flag("--pong", pong, "(internal) the echo side of the raw ping-pong");
+  app.add_option("--domain", dpc::g_domain, "DDS domain (loopback profile)")->check(CLI::Range(0, 232));
+  app.add_option("--only", only, "One section: raw,loop,rate,failover,tracking,memory");
+  CLI11_PARSE(app, argc, argv);
+  if (pong) return dpc::RunPong();
+  dpc::g_dir = std::filesystem::temp_directory_path().string() + "/dpc_bus_benchmark_" + std::to_string(getpid());
+  std::filesystem::create_directories(dpc::g_dir);
+  fmt::print("dpc_bus_benchmark: domain {}, logs in {}{}\n", dpc::g_domain, dpc::g_dir, quick ? " (quick)" : "");
+  auto want = [&](const char* s) { return only.empty() || only == s; };
+  const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+  dpc::Percentiles raw;
+  if (want("raw") || want("loop")) {
+    raw = dpc::RawPingPong(self, quick ? 3000 : 20000);
+    fmt::print("raw Fast DDS ping-pong (StokesSample → WaveplateState, bench QoS), one hop: {}\n", dpc::Us(raw));
+  }
+  if (want("loop")) dpc::LoopLatency(quick ? 0.5 : 3.0, raw);
+  if (want("failover")) dpc::Failover(quick ? 3 : 10);
+  if (want("tracking")) dpc::Tracking(quick ? 3.0 : 10.0);
+  if (want("rate")) dpc::Rates(quick ? 10.0 : 60.0);
+  if (want("memory")) dpc::Memory(quick ? 60.0 : 600.0);
+  return 0;
+}
