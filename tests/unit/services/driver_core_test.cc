@@ -1,0 +1,155 @@
+#include "driver_core.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "dpc/config/scenario_config.h"
+
+namespace dpc::services {
+namespace {
+
+constexpr int64_t kUs = 1000;
+constexpr int64_t kMs = 1000 * kUs;
+
+msg::WaveplateCommand Command(const std::string& id, int priority, std::vector<double> phi,
+                              uint64_t sample, int64_t sample_time_ns = 0) {
+  msg::WaveplateCommand c;
+  c.bench_id("bench1");
+  c.controller_id(id);
+  c.priority(priority);
+  c.answers_sample(sample);
+  c.sample_time_ns(sample_time_ns);
+  c.phi(std::move(phi));
+  return c;
+}
+
+class DriverCoreTest : public ::testing::Test {
+ protected:
+  DriverCoreTest() : backend_(ControlVector::Zero(3)), core_(StagesFromAxes("131"), DriverSettings{}, &backend_) {}
+  SimulatedWaveplates backend_;
+  DriverCore core_;
+};
+
+TEST_F(DriverCoreTest, StartsHoldingWithTheBackendsPhi) {
+  const msg::WaveplateState state = core_.State(0);
+  EXPECT_EQ(state.mode(), msg::DRIVER_HOLDING);
+  EXPECT_EQ(state.phi_applied(), std::vector<double>({0.0, 0.0, 0.0}));
+  EXPECT_NE(state.reason().to_string().find("no controller"), std::string::npos);
+}
+
+TEST_F(DriverCoreTest, AppliesTheFirstControllersCommandAndAnswersItsSample) {
+  auto state = core_.OnCommand(Command("A", 0, {0.1, 0.2, 0.3}, 7), 1 * kMs, 5);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->mode(), msg::DRIVER_ACTIVE);
+  EXPECT_EQ(state->obeyed_controller_id().to_string(), "A");
+  EXPECT_EQ(state->answers_sample(), 7u);
+  EXPECT_EQ(state->phi_applied(), std::vector<double>({0.1, 0.2, 0.3}));
+  EXPECT_EQ(backend_.Applied(), (ControlVector(3) << 0.1, 0.2, 0.3).finished());
+}
+
+TEST_F(DriverCoreTest, RefusesMalformedCommandsAndNeverAppliesThem) {
+  ASSERT_TRUE(core_.OnCommand(Command("A", 0, {0.1, 0.2, 0.3}, 1), 1 * kMs, 0));
+  for (const auto& phi : {std::vector<double>{NAN, 0, 0}, std::vector<double>{0, INFINITY, 0},
+                          std::vector<double>{0.1, 0.2}, std::vector<double>(17, 0.0)}) {
+    auto state = core_.OnCommand(Command("A", 0, phi, 2), 1 * kMs + 10 * kUs, 0);
+    ASSERT_TRUE(state.has_value()) << "the obeyed controller's bad command is answered";
+    EXPECT_EQ(state->phi_applied(), std::vector<double>({0.1, 0.2, 0.3}));
+  }
+  EXPECT_EQ(core_.commands_rejected(), 4u);
+  EXPECT_NE(core_.last_rejection().find("oversized"), std::string::npos) << core_.last_rejection();
+  // A stranger's bad command is counted too, but not answered.
+  EXPECT_FALSE(core_.OnCommand(Command("B", 99, {NAN, 0, 0}, 3), 1 * kMs + 20 * kUs, 0));
+  EXPECT_EQ(core_.commands_rejected(), 5u);
+  EXPECT_EQ(core_.obeyed(), "A");
+}
+
+TEST_F(DriverCoreTest, HigherPriorityTakesOverLowerIsIgnored) {
+  ASSERT_TRUE(core_.OnCommand(Command("low", 0, {0.1, 0.1, 0.1}, 1), 1 * kMs, 0));
+  auto state = core_.OnCommand(Command("high", 5, {0.2, 0.2, 0.2}, 1), 1 * kMs + 10 * kUs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->obeyed_controller_id().to_string(), "high");
+  EXPECT_EQ(state->controller_switches(), 2u);
+  EXPECT_FALSE(core_.OnCommand(Command("low", 0, {0.9, 0.9, 0.9}, 2), 1 * kMs + 100 * kUs, 0));
+  EXPECT_EQ(backend_.Applied(), ControlVector::Constant(3, 0.2));
+}
+
+TEST_F(DriverCoreTest, FailsOverToTheStandbyWhenTheObeyedControllerFallsSilent) {
+  int64_t t = 0;
+  for (int k = 1; k <= 50; ++k, t += 100 * kUs) {  // 10 kHz
+    core_.OnCommand(Command("primary", 10, {0.1, 0.1, 0.1}, k), t, 0);
+    core_.OnCommand(Command("standby", 0, {0.1, 0.1, 0.1}, k), t + 10 * kUs, 0);
+  }
+  ASSERT_EQ(core_.obeyed(), "primary");
+  // The primary stops; the standby goes on. Silence timeout: max(2 ms, 8 × 0.1 ms) = 2 ms. The
+  // switch comes from whichever is first: a Tick, or the standby's next command.
+  int64_t switched_at = -1;
+  for (int k = 51; k <= 100 && switched_at < 0; ++k, t += 100 * kUs) {
+    for (int64_t tick = t; tick < t + 100 * kUs && switched_at < 0; tick += 25 * kUs) {
+      if (tick == t + 25 * kUs) {
+        auto state = core_.OnCommand(Command("standby", 0, {0.1, 0.1, 0.1}, k), tick, 0);
+        if (core_.obeyed() == "standby") {
+          ASSERT_TRUE(state.has_value());
+          EXPECT_EQ(state->answers_sample(), static_cast<uint64_t>(k));
+          switched_at = tick;
+        }
+        continue;
+      }
+      if (auto state = core_.Tick(tick, 0); state && core_.obeyed() == "standby") {
+        EXPECT_NE(state->reason().to_string().find("primary silent"), std::string::npos);
+        switched_at = tick;
+      }
+    }
+  }
+  ASSERT_GT(switched_at, 0);
+  const int64_t last_primary = 49 * 100 * kUs;
+  EXPECT_GE(switched_at - last_primary, 2 * kMs);
+  EXPECT_LE(switched_at - last_primary, 2 * kMs + 100 * kUs);
+  EXPECT_EQ(core_.obeyed(), "standby");
+}
+
+TEST_F(DriverCoreTest, HoldsAndSaysWhyWhenNoControllerIsLeftThenResumes) {
+  ASSERT_TRUE(core_.OnCommand(Command("only", 0, {0.3, 0.2, 0.1}, 1), 0, 0));
+  EXPECT_FALSE(core_.Tick(1 * kMs, 0).has_value());
+  auto state = core_.Tick(3 * kMs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->mode(), msg::DRIVER_HOLDING);
+  EXPECT_NE(state->reason().to_string().find("only silent"), std::string::npos) << state->reason().to_string();
+  EXPECT_EQ(state->phi_applied(), std::vector<double>({0.3, 0.2, 0.1}));
+  // Heartbeats while holding, every 5 ms.
+  EXPECT_TRUE(core_.Tick(9 * kMs, 0).has_value());
+  EXPECT_FALSE(core_.Tick(10 * kMs, 0).has_value());
+  // A controller resumes.
+  state = core_.OnCommand(Command("next", 0, {0.31, 0.2, 0.1}, 2), 20 * kMs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->mode(), msg::DRIVER_ACTIVE);
+  EXPECT_EQ(state->obeyed_controller_id().to_string(), "next");
+}
+
+TEST(DriverCoreLimits, ClampsToTheStageRangeAndReportsSaturation) {
+  std::vector<StageConfig> stages = StagesFromAxes("131");
+  stages[1].range = ControlRange{-0.5, 0.5};
+  SimulatedWaveplates backend(ControlVector::Zero(3));
+  DriverCore core(stages, DriverSettings{}, &backend);
+  auto state = core.OnCommand(Command("A", 0, {0.1, 0.9, -0.2}, 1), 0, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->phi_applied(), std::vector<double>({0.1, 0.5, -0.2}));
+  EXPECT_EQ(state->saturated(), std::vector<bool>({false, true, false}));
+  EXPECT_EQ(state->commands_limited(), 1u);
+}
+
+TEST(DriverCoreLimits, LimitsTheSlewOverBenchTime) {
+  DriverSettings settings;
+  settings.max_slew_per_s = 100.0;  // 0.01 per 100 µs
+  SimulatedWaveplates backend(ControlVector::Zero(3));
+  DriverCore core(StagesFromAxes("131"), settings, &backend);
+  ASSERT_TRUE(core.OnCommand(Command("A", 0, {0.0, 0.0, 0.0}, 1, 0), 0, 0));
+  auto state = core.OnCommand(Command("A", 0, {0.5, -0.005, 0.0}, 2, 100 * kUs), 100 * kUs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_NEAR(state->phi_applied()[0], 0.01, 1e-12);
+  EXPECT_NEAR(state->phi_applied()[1], -0.005, 1e-12);
+  EXPECT_EQ(state->saturated(), std::vector<bool>({true, false, false}));
+}
+
+}  // namespace
+}  // namespace dpc::services
