@@ -12,7 +12,7 @@
  * publishes a TargetRequest (point target) once the driver's reader has matched.
  *
  * Exits 0 once it has seen the device description, a target, K states and (with --request)
- * the target whose request_id is ours; 1 on timeout (stderr says what is missing); 2 on bad
+ * the target whose request_id is ours and the driver's reply (or 1 s has passed since that target); 1 on timeout (stderr says what is missing); 2 on bad
  * arguments; 3 if Cyclone refused an entity. The network configuration comes from
  * CYCLONEDDS_URI (tests/interop/cyclonedds-loopback.xml confines it to `lo`).
  */
@@ -302,6 +302,7 @@ int main(int argc, char **argv) {
   bool have_target = false;
   bool have_our_target = false;
   bool have_reply = false;
+  double our_target_s = 0;
   long states_seen = 0;
   int requests_sent = 0;
   double last_request_s = 0;
@@ -324,7 +325,10 @@ int main(int argc, char **argv) {
       if (info[0].valid_data && strcmp(t->bench_id, bench_id) == 0) {
         print_target(t);
         have_target = true;
-        if (request && strcmp(t->request_id, request_id) == 0) have_our_target = true;
+        if (request && strcmp(t->request_id, request_id) == 0 && !have_our_target) {
+          have_our_target = true;
+          our_target_s = now_s();
+        }
       }
       dds_return_loan(targets, samples, n);
       samples[0] = NULL;
@@ -375,8 +379,9 @@ int main(int argc, char **argv) {
       }
     }
 
+    /* The reply follows the target: give it up to 1 s once the new target is here. */
     const bool done = have_description && have_target && states_seen >= states_wanted &&
-                      (!request || have_our_target);
+                      (!request || (have_our_target && (have_reply || t - our_target_s > 1.0)));
     if (done) {
       fprintf(stderr, "dpc-cyclone-probe: done after %.3f s\n", now_s() - start_s);
       break;
