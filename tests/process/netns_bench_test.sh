@@ -17,7 +17,7 @@
 # TRANSIENT_LOCAL delivery). DPC_NETNS_RATE_HZ overrides the polarimeter's rate (2000).
 #
 # Needs root and `ip netns` (exit 77 = skipped otherwise). Cleans up its processes and
-# namespaces on any exit.
+# namespaces on any exit; DPC_NETNS_KEEP_LOGS=DIR keeps the profiles and logs there.
 set -euo pipefail
 
 if [[ $# -ne 5 ]]; then
@@ -72,6 +72,9 @@ cleanup() {
     for log in "$WORK"/*.log "$WORK"/*.json; do
       [[ -f $log ]] && { echo "--- $(basename "$log")"; tail -n 40 "$log"; }
     done
+  fi
+  if [[ -n ${DPC_NETNS_KEEP_LOGS:-} ]]; then
+    mkdir -p "$DPC_NETNS_KEEP_LOGS" && cp -r "$WORK"/. "$DPC_NETNS_KEEP_LOGS"/
   fi
   rm -rf "$WORK"
   exit $rc
