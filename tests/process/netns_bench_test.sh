@@ -11,8 +11,8 @@
 #              unicast locators on the veth address, no multicast locators.
 # CASE server: a Fast DDS discovery server (fast-discovery-server -x) bound to A's veth address;
 #              every service is a CLIENT of it (no multicast, no initial peers).
-# Asserts from the polarimeter's JSON summary (real time, 2 kHz, 6 s) that the loop locked, the
-# median error after lock is below 2° and the mean below 10° (see below); prints the time the
+# Asserts from the polarimeter's JSON summary (real time, 2 kHz, 6 s) that the loop locked
+# (first_lock_time_s), the median error after lock is below 2° and the mean below 10° (see below); prints the time the
 # controller needed to receive the device description across the namespaces (discovery +
 # TRANSIENT_LOCAL delivery). DPC_NETNS_RATE_HZ overrides the polarimeter's rate (2000).
 #
@@ -54,7 +54,6 @@ DOMAIN=62
 RATE_HZ=${DPC_NETNS_RATE_HZ:-2000}
 [[ $CASE == server ]] && DOMAIN=63
 SERVER_PORT=11811
-SERVER_PREFIX="44.53.00.5f.45.50.52.4f.53.49.4d.41"   # fast-discovery-server -i 0's prefix
 WORK=$(mktemp -d /tmp/dpc-netns.XXXXXX)
 PIDS=()
 NAMESPACES=()
@@ -104,68 +103,27 @@ for _ in $(seq 100); do veth_up && break; sleep 0.05; done
 veth_up || fail "the veth pair $VETH_A/$VETH_B did not come up"
 echo "namespaces $NS_A ($ADDR_A) and $NS_B ($ADDR_B), case $CASE, domain $DOMAIN"
 
-# --- Fast DDS profiles -------------------------------------------------------------------------
+# --- Fast DDS profiles (deploy/fastdds/make_profile.sh, next to the loopback file) --------------
 # The topic profiles ("<topic>.writer/.reader") are copied from the loopback file, so the QoS is
-# the bench's; only the transport and discovery differ.
-TOPIC_PROFILES="$WORK/topic_profiles.xml"
-awk '/<data_writer|<data_reader/ { on = 1 } /<\/profiles>/ { on = 0 } on' "$LOOPBACK_XML" >"$TOPIC_PROFILES"
-[[ $(grep -c 'profile_name="dpc_' "$TOPIC_PROFILES") -eq 16 ]] ||
-  fail "expected 16 topic profiles in $LOOPBACK_XML"
-
-udp_locator() { echo "<locator><udpv4><address>$1</address>${2:+<port>$2</port>}</udpv4></locator>"; }
-
-# participant_profile SELF_ADDRESS PEER_ADDRESS FILE
-participant_profile() {
-  local self=$1 peer=$2 out=$3 discovery
-  if [[ $CASE == peers ]]; then
-    discovery="
-          <discovery_config>
-            <leaseDuration><sec>5</sec></leaseDuration>
-            <leaseAnnouncement><sec>1</sec></leaseAnnouncement>
-          </discovery_config>
-          <initialPeersList>$(udp_locator "$peer")$(udp_locator "$self")</initialPeersList>
-          <metatrafficUnicastLocatorList>$(udp_locator "$self")</metatrafficUnicastLocatorList>"
-  else
-    discovery="
-          <discovery_config>
-            <discoveryProtocol>CLIENT</discoveryProtocol>
-            <discoveryServersList>
-              <RemoteServer prefix=\"$SERVER_PREFIX\">
-                <metatrafficUnicastLocatorList>$(udp_locator "$ADDR_A" "$SERVER_PORT")</metatrafficUnicastLocatorList>
-              </RemoteServer>
-            </discoveryServersList>
-            <leaseDuration><sec>5</sec></leaseDuration>
-            <leaseAnnouncement><sec>1</sec></leaseAnnouncement>
-          </discovery_config>
-          <metatrafficUnicastLocatorList>$(udp_locator "$self")</metatrafficUnicastLocatorList>"
-  fi
-  cat >"$out" <<EOF
-<?xml version="1.0" encoding="UTF-8" ?>
-<dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
-  <profiles>
-    <transport_descriptors>
-      <transport_descriptor>
-        <transport_id>dpc_udp</transport_id>
-        <type>UDPv4</type>
-        <interfaceWhiteList><address>$self</address></interfaceWhiteList>
-      </transport_descriptor>
-    </transport_descriptors>
-    <participant profile_name="dpc.participant" is_default_profile="true">
-      <rtps>
-        <useBuiltinTransports>false</useBuiltinTransports>
-        <userTransports><transport_id>dpc_udp</transport_id></userTransports>
-        <defaultUnicastLocatorList>$(udp_locator "$self")</defaultUnicastLocatorList>
-        <builtin>$discovery
-        </builtin>
-      </rtps>
-    </participant>
-$(cat "$TOPIC_PROFILES")
-  </profiles>
-</dds>
-EOF
-}
-participant_profile "$ADDR_A" "$ADDR_B" "$WORK/profile_a.xml"
-participant_profile "$ADDR_B" "$ADDR_A" "$WORK/profile_b.xml"
+# the bench's; only the transport (UDPv4 on the veth address) and discovery differ.
+MAKE_PROFILE="$(dirname "$LOOPBACK_XML")/make_profile.sh"
+[[ -x $MAKE_PROFILE ]] || fail "$MAKE_PROFILE missing"
+if [[ $CASE == peers ]]; then
+  "$MAKE_PROFILE" --topics-from "$LOOPBACK_XML" --address "$ADDR_A" --peers "$ADDR_B" >"$WORK/profile_a.xml"
+  "$MAKE_PROFILE" --topics-from "$LOOPBACK_XML" --address "$ADDR_B" --peers "$ADDR_A" >"$WORK/profile_b.xml"
+else
+  for side in a b; do
+    addr=$ADDR_A; [[ $side == b ]] && addr=$ADDR_B
+    "$MAKE_PROFILE" --topics-from "$LOOPBACK_XML" --address "$addr" --server "$ADDR_A:$SERVER_PORT" \
+      >"$WORK/profile_$side.xml"
+  done
+  "$MAKE_PROFILE" --discovery-server "$ADDR_A:$SERVER_PORT" >"$WORK/server.xml"
+fi
+for f in "$WORK"/profile_[ab].xml; do
+  [[ $(grep -c 'profile_name="dpc_' "$f") -eq 16 ]] || fail "expected 16 topic profiles in $f"
+  # No multicast anywhere: discovery must not depend on it.
+  ! grep -q -i multicast "$f" || fail "$f mentions multicast"
+done
 
 # run_in NS PROFILE LOG CMD...: a service in a namespace, in the background; its PID is recorded.
 run_in() {
@@ -188,31 +146,6 @@ wait_for() {
 
 # --- discovery server (case server) ------------------------------------------------------------
 if [[ $CASE == server ]]; then
-  cat >"$WORK/server.xml" <<EOF
-<?xml version="1.0" encoding="UTF-8" ?>
-<dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
-  <profiles>
-    <transport_descriptors>
-      <transport_descriptor>
-        <transport_id>dpc_server_udp</transport_id>
-        <type>UDPv4</type>
-        <interfaceWhiteList><address>$ADDR_A</address></interfaceWhiteList>
-      </transport_descriptor>
-    </transport_descriptors>
-    <participant profile_name="dpc.discovery_server" is_default_profile="true">
-      <rtps>
-        <prefix>$SERVER_PREFIX</prefix>
-        <useBuiltinTransports>false</useBuiltinTransports>
-        <userTransports><transport_id>dpc_server_udp</transport_id></userTransports>
-        <builtin>
-          <discovery_config><discoveryProtocol>SERVER</discoveryProtocol></discovery_config>
-          <metatrafficUnicastLocatorList>$(udp_locator "$ADDR_A" "$SERVER_PORT")</metatrafficUnicastLocatorList>
-        </builtin>
-      </rtps>
-    </participant>
-  </profiles>
-</dds>
-EOF
   t0=$(date +%s%N)
   ip netns exec "$NS_A" fast-discovery-server -x "$WORK/server.xml" >"$WORK/server.log" 2>&1 &
   PIDS+=($!)
@@ -221,9 +154,9 @@ EOF
   }
   wait_for 20 "the discovery server on $ADDR_A:$SERVER_PORT" server_listening
   echo "discovery server listening on $ADDR_A:$SERVER_PORT after $(( ($(date +%s%N) - t0) / 1000000 )) ms"
-  # Nothing but the veth address: the server must not bind 0.0.0.0.
+  # Nothing but the veth address (fast-discovery-server -l would bind 0.0.0.0).
   if ip netns exec "$NS_A" ss -Hunlp | awk '/fast-discovery/ { print $4 }' | grep -q -v "^$ADDR_A:"; then
-    fail "the discovery server bound 0.0.0.0: $(ip netns exec "$NS_A" ss -Hunlp | grep fast-discovery)"
+    fail "the discovery server bound another address than $ADDR_A: $(ip netns exec "$NS_A" ss -Hunlp | grep fast-discovery)"
   fi
 fi
 
@@ -255,7 +188,13 @@ for pid in "${PIDS[@]}"; do
 done
 
 echo "$SUMMARY" | jq -c '{lock_time_s, first_lock_time_s, error_deg, bench: .bench}'
-echo "$SUMMARY" | jq -e '.lock_time_s != null' >/dev/null || fail "the loop never locked across the namespaces"
+# lock_time_s: from when the error stays below 10° to the end; unset if the last sample is above.
+# A process starved at the very end would unset it, so the hard check is the first lock plus the
+# median below; a missing lock_time_s is reported.
+echo "$SUMMARY" | jq -e '.first_lock_time_s != null' >/dev/null || fail "the loop never locked across the namespaces"
+if ! echo "$SUMMARY" | jq -e '.lock_time_s != null' >/dev/null; then
+  echo "note: the error was above 10° at the end of the run (lock_time_s null)"
+fi
 # While locked the error is ~1.2° at 2 kHz (20 rad/s scrambler × ~1 ms loop). The median must be
 # below 2°: the loop holds the target most of the time. The mean is bounded loosely (10°): on this
 # shared 2-core machine a process starved for 100 ms lets the scrambler move the light by 2 rad,
@@ -269,8 +208,9 @@ if ! echo "$SUMMARY" | jq -e '.error_deg.mean < 2' >/dev/null; then
 fi
 echo "$SUMMARY" | jq -e --argjson rate "$RATE_HZ" '.bench.published >= 3 * $rate' >/dev/null ||
   fail "the polarimeter published too few samples: $(echo "$SUMMARY" | jq -c .bench)"
-printf 'PASS (%s): device description after %d ms; lock at %s s; error mean %s° p99 %s°; %s Hz achieved\n' \
-  "$CASE" "$discovery_ms" "$(echo "$SUMMARY" | jq .lock_time_s)" \
+printf 'PASS (%s): device description after %d ms; first lock at %s s, locked from %s s; error mean %s° p99 %s°; %s Hz achieved\n' \
+  "$CASE" "$discovery_ms" "$(echo "$SUMMARY" | jq '.first_lock_time_s*1000|round/1000')" \
+  "$(echo "$SUMMARY" | jq 'if .lock_time_s then .lock_time_s*1000|round/1000 else null end')" \
   "$(echo "$SUMMARY" | jq '.error_deg.mean*1000|round/1000')" \
   "$(echo "$SUMMARY" | jq '.error_deg.p99*1000|round/1000')" \
   "$(echo "$SUMMARY" | jq '.bench.achieved_rate_hz|round')"
