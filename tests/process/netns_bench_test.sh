@@ -1,0 +1,216 @@
+#!/usr/bin/env bash
+# The solver on another "host": the bench (dpc-polarimeter + dpc-driver) in network namespace A,
+# the controller in namespace B, joined only by a veth pair (10.99.X.1/24 ↔ 10.99.X.2/24).
+# Every participant uses UDPv4 whitelisted to its namespace's veth address, built-in transports
+# off (no SHM, nothing else); the namespaces have no route to any other network, so no DDS
+# traffic can leave them.
+#
+#   netns_bench_test.sh CASE DPC_DRIVER DPC_CONTROLLER DPC_POLARIMETER LOOPBACK_XML
+#
+# CASE peers:  discovery by unicast only: initial peers = both veth addresses, metatraffic
+#              unicast locators on the veth address, no multicast locators.
+# CASE server: a Fast DDS discovery server (fast-discovery-server -x) bound to A's veth address;
+#              every service is a CLIENT of it (no multicast, no initial peers).
+# Asserts from the polarimeter's JSON summary (real time, 2 kHz, 6 s) that the loop locked
+# (first_lock_time_s), the median error after lock is below 2° and the mean below 10° (see below); prints the time the
+# controller needed to receive the device description across the namespaces (discovery +
+# TRANSIENT_LOCAL delivery). DPC_NETNS_RATE_HZ overrides the polarimeter's rate (2000).
+#
+# Needs root and `ip netns` (exit 77 = skipped otherwise). Cleans up its processes and
+# namespaces on any exit; DPC_NETNS_KEEP_LOGS=DIR keeps the profiles and logs there.
+set -euo pipefail
+
+if [[ $# -ne 5 ]]; then
+  echo "usage: $0 peers|server DPC_DRIVER DPC_CONTROLLER DPC_POLARIMETER LOOPBACK_XML" >&2
+  exit 2
+fi
+CASE=$1
+DRIVER=$2
+CONTROLLER=$3
+POLARIMETER=$4
+LOOPBACK_XML=$5
+case $CASE in peers|server) ;; *) echo "unknown case $CASE" >&2; exit 2 ;; esac
+
+skip() { echo "SKIP: $*"; exit 77; }
+[[ $(id -u) -eq 0 ]] || skip "needs root (network namespaces)"
+command -v ip >/dev/null || skip "ip (iproute2) not installed"
+command -v jq >/dev/null || skip "jq not installed"
+command -v ss >/dev/null || skip "ss (iproute2) not installed"
+if [[ $CASE == server ]]; then
+  command -v fast-discovery-server >/dev/null || skip "fast-discovery-server (fastdds-tools) not installed"
+fi
+for f in "$DRIVER" "$CONTROLLER" "$POLARIMETER"; do
+  [[ -x $f ]] || { echo "FAIL: $f is not built" >&2; exit 1; }
+done
+
+NS_A="dpcA-$$"
+NS_B="dpcB-$$"
+VETH_A="dva$$"           # ≤ 15 characters for any PID
+VETH_B="dvb$$"
+X=$(( $$ % 250 + 1 ))
+ADDR_A="10.99.$X.1"
+ADDR_B="10.99.$X.2"
+DOMAIN=62
+RATE_HZ=${DPC_NETNS_RATE_HZ:-2000}
+[[ $CASE == server ]] && DOMAIN=63
+SERVER_PORT=11811
+WORK=$(mktemp -d /tmp/dpc-netns.XXXXXX)
+PIDS=()
+NAMESPACES=()
+
+cleanup() {
+  local rc=$?
+  set +e
+  for pid in "${PIDS[@]}"; do kill -TERM "$pid" 2>/dev/null; done
+  for pid in "${PIDS[@]}"; do
+    for _ in $(seq 30); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+    kill -KILL "$pid" 2>/dev/null
+  done
+  for ns in "${NAMESPACES[@]}"; do ip netns del "$ns" 2>/dev/null; done
+  if [[ $rc -ne 0 && $rc -ne 77 ]]; then
+    for log in "$WORK"/*.log "$WORK"/*.json; do
+      [[ -f $log ]] && { echo "--- $(basename "$log")"; tail -n 40 "$log"; }
+    done
+  fi
+  if [[ -n ${DPC_NETNS_KEEP_LOGS:-} ]]; then
+    mkdir -p "$DPC_NETNS_KEEP_LOGS" && cp -r "$WORK"/. "$DPC_NETNS_KEEP_LOGS"/
+  fi
+  rm -rf "$WORK"
+  exit $rc
+}
+trap cleanup EXIT
+trap 'exit 1' INT TERM
+
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+# --- namespaces --------------------------------------------------------------------------------
+ip netns add "$NS_A" 2>/dev/null || skip "cannot create network namespaces (ip netns add failed)"
+NAMESPACES+=("$NS_A")
+ip netns add "$NS_B" || fail "ip netns add $NS_B"
+NAMESPACES+=("$NS_B")
+# The veth pair is created directly inside the two namespaces: it never appears on the host.
+ip link add "$VETH_A" netns "$NS_A" type veth peer name "$VETH_B" netns "$NS_B"
+ip -n "$NS_A" addr add "$ADDR_A/24" dev "$VETH_A"
+ip -n "$NS_B" addr add "$ADDR_B/24" dev "$VETH_B"
+for ns in "$NS_A" "$NS_B"; do ip -n "$ns" link set lo up; done
+ip -n "$NS_A" link set "$VETH_A" up
+ip -n "$NS_B" link set "$VETH_B" up
+veth_up() {
+  ip -n "$NS_A" -o link show "$VETH_A" | grep -q 'state UP' &&
+    ip -n "$NS_B" -o link show "$VETH_B" | grep -q 'state UP'
+}
+for _ in $(seq 100); do veth_up && break; sleep 0.05; done
+veth_up || fail "the veth pair $VETH_A/$VETH_B did not come up"
+echo "namespaces $NS_A ($ADDR_A) and $NS_B ($ADDR_B), case $CASE, domain $DOMAIN"
+
+# --- Fast DDS profiles (deploy/fastdds/make_profile.sh, next to the loopback file) --------------
+# The topic profiles ("<topic>.writer/.reader") are copied from the loopback file, so the QoS is
+# the bench's; only the transport (UDPv4 on the veth address) and discovery differ.
+MAKE_PROFILE="$(dirname "$LOOPBACK_XML")/make_profile.sh"
+[[ -x $MAKE_PROFILE ]] || fail "$MAKE_PROFILE missing"
+if [[ $CASE == peers ]]; then
+  "$MAKE_PROFILE" --topics-from "$LOOPBACK_XML" --address "$ADDR_A" --peers "$ADDR_B" >"$WORK/profile_a.xml"
+  "$MAKE_PROFILE" --topics-from "$LOOPBACK_XML" --address "$ADDR_B" --peers "$ADDR_A" >"$WORK/profile_b.xml"
+else
+  for side in a b; do
+    addr=$ADDR_A; [[ $side == b ]] && addr=$ADDR_B
+    "$MAKE_PROFILE" --topics-from "$LOOPBACK_XML" --address "$addr" --server "$ADDR_A:$SERVER_PORT" \
+      >"$WORK/profile_$side.xml"
+  done
+  "$MAKE_PROFILE" --discovery-server "$ADDR_A:$SERVER_PORT" >"$WORK/server.xml"
+fi
+for f in "$WORK"/profile_[ab].xml; do
+  [[ $(grep -c 'profile_name="dpc_' "$f") -eq 16 ]] || fail "expected 16 topic profiles in $f"
+  # No multicast anywhere: discovery must not depend on it.
+  ! grep -q -i multicast "$f" || fail "$f mentions multicast"
+done
+
+# run_in NS PROFILE LOG CMD...: a service in a namespace, in the background; its PID is recorded.
+run_in() {
+  local ns=$1 profile=$2 log=$3
+  shift 3
+  ip netns exec "$ns" env FASTRTPS_DEFAULT_PROFILES_FILE="$profile" "$@" >"$log" 2>&1 &
+  PIDS+=($!)
+}
+
+# wait_for SECONDS DESCRIPTION COMMAND...: polls every 20 ms.
+wait_for() {
+  local limit=$1 what=$2
+  shift 2
+  local end=$(( $(date +%s%N) + limit * 1000000000 ))
+  until "$@" >/dev/null 2>&1; do
+    (( $(date +%s%N) < end )) || fail "timed out after ${limit} s waiting for $what"
+    sleep 0.02
+  done
+}
+
+# --- discovery server (case server) ------------------------------------------------------------
+if [[ $CASE == server ]]; then
+  t0=$(date +%s%N)
+  ip netns exec "$NS_A" fast-discovery-server -x "$WORK/server.xml" >"$WORK/server.log" 2>&1 &
+  PIDS+=($!)
+  server_listening() {
+    ip netns exec "$NS_A" ss -Hunl "src $ADDR_A:$SERVER_PORT" | grep -q .
+  }
+  wait_for 20 "the discovery server on $ADDR_A:$SERVER_PORT" server_listening
+  echo "discovery server listening on $ADDR_A:$SERVER_PORT after $(( ($(date +%s%N) - t0) / 1000000 )) ms"
+  # Nothing but the veth address (fast-discovery-server -l would bind 0.0.0.0).
+  if ip netns exec "$NS_A" ss -Hunlp | awk '/fast-discovery/ { print $4 }' | grep -q -v "^$ADDR_A:"; then
+    fail "the discovery server bound another address than $ADDR_A: $(ip netns exec "$NS_A" ss -Hunlp | grep fast-discovery)"
+  fi
+fi
+
+# --- the bench: driver in A, controller in B, then the polarimeter in A ------------------------
+run_in "$NS_A" "$WORK/profile_a.xml" "$WORK/driver.log" "$DRIVER" --domain "$DOMAIN"
+t0=$(date +%s%N)
+run_in "$NS_B" "$WORK/profile_b.xml" "$WORK/controller.log" "$CONTROLLER" --domain "$DOMAIN" --id remote
+wait_for 30 "the controller (namespace B) to receive the device description from the driver (A)" \
+  grep -q "device: 3 stages" "$WORK/controller.log"
+discovery_ms=$(( ($(date +%s%N) - t0) / 1000000 ))
+echo "controller in $NS_B received the device description after $discovery_ms ms"
+
+# For the record: the UDP sockets of the services (namespaces hold only lo and the veth).
+for ns in "$NS_A" "$NS_B"; do
+  echo "UDP sockets in $ns: $(ip netns exec "$ns" ss -Hunl | awk '{ print $4 }' | sort -u | tr '\n' ' ')"
+done
+
+ip netns exec "$NS_A" env FASTRTPS_DEFAULT_PROFILES_FILE="$WORK/profile_a.xml" \
+  "$POLARIMETER" --domain "$DOMAIN" --rate-hz "$RATE_HZ" --run-s 6 --json \
+  >"$WORK/polarimeter.json" 2>"$WORK/polarimeter.log" &
+POL_PID=$!
+PIDS+=("$POL_PID")
+wait "$POL_PID" || fail "dpc-polarimeter failed"
+SUMMARY=$(grep '^{' "$WORK/polarimeter.json" | tail -n 1)
+[[ -n $SUMMARY ]] || fail "no JSON summary from dpc-polarimeter"
+for pid in "${PIDS[@]}"; do
+  [[ $pid == "$POL_PID" ]] && continue
+  kill -0 "$pid" 2>/dev/null || fail "a service (PID $pid) exited early"
+done
+
+echo "$SUMMARY" | jq -c '{lock_time_s, first_lock_time_s, error_deg, bench: .bench}'
+# lock_time_s: from when the error stays below 10° to the end; unset if the last sample is above.
+# A process starved at the very end would unset it, so the hard check is the first lock plus the
+# median below; a missing lock_time_s is reported.
+echo "$SUMMARY" | jq -e '.first_lock_time_s != null' >/dev/null || fail "the loop never locked across the namespaces"
+if ! echo "$SUMMARY" | jq -e '.lock_time_s != null' >/dev/null; then
+  echo "note: the error was above 10° at the end of the run (lock_time_s null)"
+fi
+# While locked the error is ~1.2° at 2 kHz (20 rad/s scrambler × ~1 ms loop). The median must be
+# below 2°: the loop holds the target most of the time. The mean is bounded loosely (10°): on this
+# shared 2-core machine a process starved for 100 ms lets the scrambler move the light by 2 rad,
+# which adds a few degrees to the mean without anything wrong on the network.
+echo "$SUMMARY" | jq -e '.error_deg.p50 != null and .error_deg.p50 < 2' >/dev/null ||
+  fail "median error after lock is not below 2°: $(echo "$SUMMARY" | jq -c .error_deg)"
+echo "$SUMMARY" | jq -e '.error_deg.mean != null and .error_deg.mean < 10' >/dev/null ||
+  fail "mean error after lock is not below 10°: $(echo "$SUMMARY" | jq -c .error_deg)"
+if ! echo "$SUMMARY" | jq -e '.error_deg.mean < 2' >/dev/null; then
+  echo "note: mean error $(echo "$SUMMARY" | jq .error_deg.mean)° ≥ 2°: the loop lost the target for a while (CPU starvation?)"
+fi
+echo "$SUMMARY" | jq -e --argjson rate "$RATE_HZ" '.bench.published >= 3 * $rate' >/dev/null ||
+  fail "the polarimeter published too few samples: $(echo "$SUMMARY" | jq -c .bench)"
+printf 'PASS (%s): device description after %d ms; first lock at %s s, locked from %s s; error mean %s° p99 %s°; %s Hz achieved\n' \
+  "$CASE" "$discovery_ms" "$(echo "$SUMMARY" | jq '.first_lock_time_s*1000|round/1000')" \
+  "$(echo "$SUMMARY" | jq 'if .lock_time_s then .lock_time_s*1000|round/1000 else null end')" \
+  "$(echo "$SUMMARY" | jq '.error_deg.mean*1000|round/1000')" \
+  "$(echo "$SUMMARY" | jq '.error_deg.p99*1000|round/1000')" \
+  "$(echo "$SUMMARY" | jq '.bench.achieved_rate_hz|round')"
