@@ -83,9 +83,16 @@ void ControllerCore::Resync(const ControlVector& phi) {
 void ControllerCore::OnState(const msg::WaveplateState& state) {
   if (!chain_) return;
   const size_t controls = static_cast<size_t>(chain_->control_count());
-  if (state.phi_applied().size() != controls) return;  // another device's state
+  if (state.phi_applied().size() != controls) {
+    RejectSample(fmt::format("state: phi_applied has {} values, the device has {} controls",
+                             state.phi_applied().size(), controls));
+    return;
+  }
   for (double v : state.phi_applied()) {
-    if (!std::isfinite(v)) return;
+    if (!std::isfinite(v)) {
+      RejectSample(fmt::format("state: phi_applied has a non-finite value {}", v));
+      return;
+    }
   }
   for (size_t i = 0; i < controls; ++i) applied_phi_[static_cast<int>(i)] = state.phi_applied()[i];
   const bool first = !have_state_;

@@ -64,6 +64,7 @@ class ControllerCore {
   bool configured() const { return chain_ != nullptr && target_ != nullptr && have_state_; }
   bool obeyed() const { return obeyed_; }
   const ControlVector& phi() const { return integrator_->phi(); }
+  /// Malformed samples and driver states (counted together, reported in the status).
   uint64_t rejected_samples() const { return rejected_samples_; }
   const std::string& last_rejection() const { return last_rejection_; }
   const std::string& condition() const { return condition_; }

@@ -82,6 +82,16 @@ TEST_F(ControllerCoreTest, RejectsMalformedSamplesAndCountsThem) {
   EXPECT_NE(core_.last_rejection().find("sequence"), std::string::npos);
 }
 
+TEST_F(ControllerCoreTest, RefusesMalformedStatesWithoutTouchingItsPhi) {
+  Configure();
+  core_.OnState(State({0.1, 0.2, 0.3}, "", 0, msg::DRIVER_HOLDING));
+  core_.OnState(State({0.1, NAN, 0.3}, "other", 1));
+  core_.OnState(State({0.1, 0.2}, "other", 1));
+  EXPECT_EQ(core_.rejected_samples(), 2u);
+  EXPECT_NE(core_.last_rejection().find("phi_applied has 2 values"), std::string::npos);
+  EXPECT_EQ(core_.phi(), (ControlVector(3) << 0.1, 0.2, 0.3).finished());
+}
+
 TEST_F(ControllerCoreTest, WhileStandbyItFollowsTheAppliedPhi) {
   Configure();
   core_.OnState(State({0, 0, 0}, "", 0, msg::DRIVER_HOLDING));
