@@ -173,6 +173,14 @@ std::optional<msg::WaveplateState> DriverCore::Tick(int64_t now_ns, int64_t wall
   return std::nullopt;
 }
 
+int64_t DriverCore::NextTickNs() const {
+  if (!obeyed_.empty()) {
+    const ControllerRecord& record = controllers_.at(obeyed_);
+    return record.last_command_ns + SilenceTimeoutNs(record) + 1;
+  }
+  return last_state_ns_ + static_cast<int64_t>(settings_.holding_state_period_s * 1e9);
+}
+
 msg::WaveplateState DriverCore::State(int64_t wall_ns) const {
   msg::WaveplateState state;
   state.bench_id(settings_.bench_id);

@@ -7,9 +7,9 @@
 // controller is alive while its last command is younger than its silence timeout:
 //   timeout = max(min_silence_s, silence_intervals × its mean command interval)
 // (the interval is an exponential average of its command arrivals), so at 10 kHz a killed
-// controller is noticed ~1 ms after its last command, where the DDS deadline (≥ 10 ms on Fast
-// DDS 2.9) would take ten times longer. Tick() runs every ~0.25 ms and switches to the next alive
-// controller, or holds the last good φ and says why.
+// controller is noticed ~2 ms after its last command, where the DDS deadline (≥ 10 ms on Fast
+// DDS 2.9) would take five times longer. Tick() runs when that deadline is due (at most every
+// 0.25 ms) and switches to the next alive controller, or holds the last good φ and says why.
 //
 // Every command is checked (CheckCommandShape: stage count, NaN/Inf, oversized) and a bad one
 // is counted and reported, never applied. A good one is clamped to each stage's range and
@@ -56,6 +56,11 @@ class DriverCore {
   /// Periodic check at `now_ns`: failover or hold when the obeyed controller fell silent, and
   /// the holding heartbeat. Returns the state to publish, if any.
   std::optional<msg::WaveplateState> Tick(int64_t now_ns, int64_t wall_ns);
+
+  /// When Tick next has something to do (monotonic ns): the obeyed controller's silence
+  /// deadline, or the next holding heartbeat. The ticker sleeps until then (capped by its
+  /// period), instead of waking every period while commands flow.
+  int64_t NextTickNs() const;
 
   /// The current state (e.g. the first one, published at start-up).
   msg::WaveplateState State(int64_t wall_ns) const;

@@ -4,6 +4,7 @@
 //
 //   dpc-driver [SCENARIO] [--domain N] [--bench-id ID] [--max-slew-per-s X] [--min-silence-s T]
 
+#include <algorithm>
 #include <atomic>
 #include <mutex>
 #include <thread>
@@ -40,7 +41,7 @@ int Run(int argc, char** argv) {
                  "Silence timeout in command intervals")
       ->check(CLI::Range(2.0, 1000.0))->capture_default_str();
   double tick_s = 2.5e-4;
-  app.add_option("--tick-s", tick_s, "How often the driver checks for silent controllers")
+  app.add_option("--tick-s", tick_s, "Shortest interval between the driver's checks for silent controllers")
       ->check(CLI::Range(1e-5, 0.1))->capture_default_str();
   try {
     app.parse(argc, argv);
@@ -139,12 +140,20 @@ int Run(int argc, char** argv) {
         });
 
     std::atomic<bool> stop{false};
+    // The ticker wakes when the obeyed controller's silence deadline (or the holding heartbeat)
+    // is due, at most every --tick-s: while commands flow, about once per silence timeout.
     std::thread ticker([&] {
-      const auto period = std::chrono::duration<double>(tick_s);
+      const int64_t tick_ns = static_cast<int64_t>(tick_s * 1e9);
+      const int64_t max_sleep_ns = 5'000'000;
       while (!stop.load()) {
-        std::this_thread::sleep_for(period);
-        std::lock_guard<std::mutex> lock(mutex);
-        if (auto state = core.Tick(bus::MonotonicNs(), bus::WallClockNs())) publish(*state);
+        int64_t due_ns;
+        {
+          std::lock_guard<std::mutex> lock(mutex);
+          const int64_t now_ns = bus::MonotonicNs();
+          if (auto state = core.Tick(now_ns, bus::WallClockNs())) publish(*state);
+          due_ns = std::clamp(core.NextTickNs(), now_ns + tick_ns, now_ns + max_sleep_ns);
+        }
+        std::this_thread::sleep_until(std::chrono::steady_clock::time_point(std::chrono::nanoseconds(due_ns)));
       }
     });
     spdlog::info("{} controls, profiles {}, domain {}", core.control_count(),
