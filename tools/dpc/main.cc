@@ -3,6 +3,7 @@
 //   dpc sim   [SCENARIO] [flags]   one closed-loop simulation (summary, JSON, trace, figure)
 //   dpc sweep [SCENARIO] [flags]   a grid of simulations over rates, methods and seeds, on all cores
 //   dpc plot  TRACE -o PNG         the paper-style figure from a trace
+//   dpc topic list|echo|hz         the bench's DDS topics (discovery, samples, rates)
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -11,6 +12,7 @@
 #include "plot_command.h"
 #include "sim_command.h"
 #include "sweep_command.h"
+#include "topic_command.h"
 
 int main(int argc, char** argv) {
   using namespace dpc::tools;
@@ -23,6 +25,8 @@ int main(int argc, char** argv) {
   CLI::App* sweep = AddSweepCommand(app, &sweep_options);
   PlotOptions plot_options;
   CLI::App* plot = AddPlotCommand(app, &plot_options);
+  TopicOptions topic_options;
+  CLI::App* topic = AddTopicCommand(app, &topic_options);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -32,5 +36,6 @@ int main(int argc, char** argv) {
   if (*sim) return RunSimCommand(sim_options);
   if (*sweep) return RunSweepCommand(sweep_options);
   if (*plot) return RunPlotCommand(plot_options);
+  if (*topic) return RunTopicCommand(topic_options);
   return kExitInvalidInput;
 }
