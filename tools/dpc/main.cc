@@ -4,6 +4,7 @@
 //   dpc sweep [SCENARIO] [flags]   a grid of simulations over rates, methods and seeds, on all cores
 //   dpc plot  TRACE -o PNG         the paper-style figure from a trace
 //   dpc topic list|echo|hz         the bench's DDS topics (discovery, samples, rates)
+//   dpc target --point S1 S2 S3    change a running bench's target (or --set-normal, --linear)
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -12,6 +13,7 @@
 #include "plot_command.h"
 #include "sim_command.h"
 #include "sweep_command.h"
+#include "target_command.h"
 #include "topic_command.h"
 
 int main(int argc, char** argv) {
@@ -27,6 +29,8 @@ int main(int argc, char** argv) {
   CLI::App* plot = AddPlotCommand(app, &plot_options);
   TopicOptions topic_options;
   CLI::App* topic = AddTopicCommand(app, &topic_options);
+  TargetOptions target_options;
+  CLI::App* target = AddTargetCommand(app, &target_options);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -37,5 +41,6 @@ int main(int argc, char** argv) {
   if (*sweep) return RunSweepCommand(sweep_options);
   if (*plot) return RunPlotCommand(plot_options);
   if (*topic) return RunTopicCommand(topic_options);
+  if (*target) return RunTargetCommand(target_options);
   return kExitInvalidInput;
 }
