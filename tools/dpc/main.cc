@@ -5,11 +5,13 @@
 //   dpc plot  TRACE -o PNG         the paper-style figure from a trace
 //   dpc topic list|echo|hz         the bench's DDS topics (discovery, samples, rates)
 //   dpc target --point S1 S2 S3    change a running bench's target (or --set-normal, --linear)
+//   dpc monitor                    a running bench's live status on one line
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
 #include "exit_codes.h"
+#include "monitor_command.h"
 #include "plot_command.h"
 #include "sim_command.h"
 #include "sweep_command.h"
@@ -31,6 +33,8 @@ int main(int argc, char** argv) {
   CLI::App* topic = AddTopicCommand(app, &topic_options);
   TargetOptions target_options;
   CLI::App* target = AddTargetCommand(app, &target_options);
+  MonitorOptions monitor_options;
+  CLI::App* monitor = AddMonitorCommand(app, &monitor_options);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -42,5 +46,6 @@ int main(int argc, char** argv) {
   if (*plot) return RunPlotCommand(plot_options);
   if (*topic) return RunTopicCommand(topic_options);
   if (*target) return RunTargetCommand(target_options);
+  if (*monitor) return RunMonitorCommand(monitor_options);
   return kExitInvalidInput;
 }
