@@ -82,7 +82,9 @@ class DdsBenchLink final : public BenchLink {
     change.swap(target_change_);
     return change;
   }
-  bool stop_requested() override { return signals_->requested(); }
+  // Polls the signal (one sigtimedwait per sample): requested() alone only reports what an
+  // earlier Wait collected, and the real-time loop otherwise calls Wait every 2^20 samples.
+  bool stop_requested() override { return signals_->Wait(std::chrono::milliseconds(0)); }
 
   uint64_t rejected_states() const { return rejected_states_; }
   const bus::ReaderCounters& state_counters() const { return states_->counters(); }

@@ -3,14 +3,20 @@
 //   dpc sim   [SCENARIO] [flags]   one closed-loop simulation (summary, JSON, trace, figure)
 //   dpc sweep [SCENARIO] [flags]   a grid of simulations over rates, methods and seeds, on all cores
 //   dpc plot  TRACE -o PNG         the paper-style figure from a trace
+//   dpc topic list|echo|hz         the bench's DDS topics (discovery, samples, rates)
+//   dpc target --point S1 S2 S3    change a running bench's target (or --set-normal, --linear)
+//   dpc monitor                    a running bench's live status on one line
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
 #include "exit_codes.h"
+#include "monitor_command.h"
 #include "plot_command.h"
 #include "sim_command.h"
 #include "sweep_command.h"
+#include "target_command.h"
+#include "topic_command.h"
 
 int main(int argc, char** argv) {
   using namespace dpc::tools;
@@ -23,6 +29,12 @@ int main(int argc, char** argv) {
   CLI::App* sweep = AddSweepCommand(app, &sweep_options);
   PlotOptions plot_options;
   CLI::App* plot = AddPlotCommand(app, &plot_options);
+  TopicOptions topic_options;
+  CLI::App* topic = AddTopicCommand(app, &topic_options);
+  TargetOptions target_options;
+  CLI::App* target = AddTargetCommand(app, &target_options);
+  MonitorOptions monitor_options;
+  CLI::App* monitor = AddMonitorCommand(app, &monitor_options);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -32,5 +44,8 @@ int main(int argc, char** argv) {
   if (*sim) return RunSimCommand(sim_options);
   if (*sweep) return RunSweepCommand(sweep_options);
   if (*plot) return RunPlotCommand(plot_options);
+  if (*topic) return RunTopicCommand(topic_options);
+  if (*target) return RunTargetCommand(target_options);
+  if (*monitor) return RunMonitorCommand(monitor_options);
   return kExitInvalidInput;
 }

@@ -1,0 +1,485 @@
+// End-to-end tests of the DDS tools of `dpc` (topic list/echo/hz, target, monitor) against a
+// real bench: dpc-driver, dpc-controller and dpc-polarimeter started as processes on a private
+// DDS domain (80–99) with the loopback-only profile. Every process a test starts is stopped
+// (SIGINT, then SIGKILL) and reaped by RAII, also when the test fails. Waits poll for a
+// condition with a deadline; nothing relies on a fixed sleep.
+
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using Clock = std::chrono::steady_clock;
+
+std::string Slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty()) out.push_back(line);
+  }
+  return out;
+}
+
+/// Polls `condition` every 20 ms until it holds (true) or `timeout` passes (false).
+bool Eventually(const std::function<bool()>& condition, std::chrono::milliseconds timeout) {
+  const auto deadline = Clock::now() + timeout;
+  while (Clock::now() < deadline) {
+    if (condition()) return true;
+    std::this_thread::sleep_for(20ms);
+  }
+  return condition();
+}
+
+/// A child process with stdout and stderr in files; stopped and reaped on destruction.
+class Process {
+ public:
+  Process(const std::vector<std::string>& argv, const fs::path& out, const fs::path& err)
+      : out_(out), err_(err), name_(argv.front()) {
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    std::vector<char*> args;
+    for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    // The loopback-only profile, whatever the caller's environment says.
+    std::vector<std::string> env_storage;
+    for (char** e = environ; *e != nullptr; ++e) {
+      if (std::string(*e).rfind("FASTRTPS_DEFAULT_PROFILES_FILE=", 0) != 0) env_storage.push_back(*e);
+    }
+    env_storage.push_back(std::string("FASTRTPS_DEFAULT_PROFILES_FILE=") + DPC_SOURCE_DIR +
+                          "/deploy/fastdds/loopback.xml");
+    std::vector<char*> env;
+    for (std::string& e : env_storage) env.push_back(e.data());
+    env.push_back(nullptr);
+    // Default SIGINT/SIGTERM and no blocked signal, whatever the test runner inherited (a shell
+    // starts background jobs with SIGINT ignored).
+    posix_spawnattr_t attributes;
+    posix_spawnattr_init(&attributes);
+    sigset_t defaults, none;
+    sigemptyset(&defaults);
+    sigaddset(&defaults, SIGINT);
+    sigaddset(&defaults, SIGTERM);
+    sigemptyset(&none);
+    posix_spawnattr_setsigdefault(&attributes, &defaults);
+    posix_spawnattr_setsigmask(&attributes, &none);
+    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK);
+    const int rc = posix_spawn(&pid_, args[0], &actions, &attributes, args.data(), env.data());
+    posix_spawnattr_destroy(&attributes);
+    posix_spawn_file_actions_destroy(&actions);
+    if (rc != 0) {
+      pid_ = -1;
+      ADD_FAILURE() << "posix_spawn " << argv.front() << ": " << std::strerror(rc);
+    }
+  }
+  ~Process() { Stop(); }
+  Process(const Process&) = delete;
+  Process& operator=(const Process&) = delete;
+
+  bool running() const { return pid_ > 0 && !status_; }
+  std::string out() const { return Slurp(out_); }
+  std::string err() const { return Slurp(err_); }
+
+  /// Waits up to `timeout` for the process to exit; its exit code (−signal if killed).
+  std::optional<int> Wait(std::chrono::milliseconds timeout) {
+    Eventually([this] { return Reap(); }, timeout);
+    return status_;
+  }
+
+  void Signal(int signal) {
+    if (running()) kill(pid_, signal);
+  }
+
+  /// SIGINT, up to 5 s to exit, then SIGKILL. Returns the exit code.
+  std::optional<int> Stop() {
+    if (pid_ <= 0) return std::nullopt;
+    if (!Reap()) {
+      kill(pid_, SIGINT);
+      if (!Wait(5000ms)) {
+        ADD_FAILURE() << name_ << " (pid " << pid_ << ") ignored SIGINT for 5 s: SIGKILL";
+        kill(pid_, SIGKILL);
+        int status = 0;
+        waitpid(pid_, &status, 0);
+        status_ = -SIGKILL;
+      }
+    }
+    return status_;
+  }
+
+ private:
+  bool Reap() {
+    if (status_) return true;
+    if (pid_ <= 0) return false;
+    int status = 0;
+    if (waitpid(pid_, &status, WNOHANG) != pid_) return false;
+    status_ = WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+    return true;
+  }
+
+  pid_t pid_ = -1;
+  std::optional<int> status_;
+  fs::path out_, err_;
+  std::string name_;
+};
+
+struct Result {
+  int exit_code;
+  std::string out;
+  std::string err;
+};
+
+class DpcTopicToolsTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("dpc_topic_tools_" + std::string(info->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    // Stop the bench before its files go, in reverse order (polarimeter first).
+    while (!bench_.empty()) bench_.pop_back();
+    fs::remove_all(dir_);
+  }
+
+  /// Starts a process (kept until the test ends); its output in files named after `tag`.
+  Process& Start(const std::string& tag, const std::vector<std::string>& argv) {
+    bench_.push_back(std::make_unique<Process>(argv, dir_ / (tag + ".out"), dir_ / (tag + ".err")));
+    return *bench_.back();
+  }
+
+  /// The bench on `domain`: driver, controller A, polarimeter at `rate_hz`.
+  void StartBench(int domain, int rate_hz = 200) {
+    const std::string d = std::to_string(domain);
+    Start("driver", {DPC_DRIVER_BINARY, "--domain", d});
+    Start("controller", {DPC_CONTROLLER_BINARY, "--domain", d, "--id", "A"});
+    // --settle-samples 0: below 1 kHz the default 1000 exceeds the scenario's samples
+    // (duration_s × rate) and the polarimeter refuses to start.
+    Start("polarimeter", {DPC_POLARIMETER_BINARY, "--domain", d, "--rate-hz", std::to_string(rate_hz),
+                          "--settle-samples", "0"});
+    for (const auto& p : bench_) ASSERT_TRUE(p->running());
+  }
+
+  /// Runs `dpc <args>` to completion (at most `timeout`).
+  Result Dpc(const std::vector<std::string>& args, std::chrono::milliseconds timeout = 30000ms) {
+    std::vector<std::string> argv = {DPC_BINARY};
+    argv.insert(argv.end(), args.begin(), args.end());
+    const std::string tag = "dpc" + std::to_string(++runs_);
+    Process p(argv, dir_ / (tag + ".out"), dir_ / (tag + ".err"));
+    const std::optional<int> code = p.Wait(timeout);
+    if (!code) ADD_FAILURE() << "dpc did not finish within " << timeout.count() << " ms";
+    const int exit_code = code ? *code : p.Stop().value_or(-1);
+    return {exit_code, p.out(), p.err()};
+  }
+
+  /// Waits until the bench's controller is obeyed: one state sample naming it.
+  void AwaitObeyed(int domain, const std::string& controller) {
+    const bool obeyed = Eventually(
+        [&] {
+          const Result r = Dpc({"topic", "echo", "state", "--json", "--count", "1", "--timeout-s", "5",
+                                "--domain", std::to_string(domain)});
+          if (r.exit_code != 0) return false;
+          const auto j = nlohmann::json::parse(r.out, nullptr, false);
+          return !j.is_discarded() && j["mode"] == "DRIVER_ACTIVE" &&
+                 j["obeyed_controller_id"] == controller;
+        },
+        30000ms);
+    ASSERT_TRUE(obeyed) << "the driver never obeyed controller " << controller << "\n"
+                        << Slurp(dir_ / "driver.err") << Slurp(dir_ / "controller.err");
+  }
+
+  fs::path dir_;
+  std::vector<std::unique_ptr<Process>> bench_;
+  int runs_ = 0;
+};
+
+// ---- no bench needed
+
+TEST_F(DpcTopicToolsTest, UnknownTopicExits2AndListsTheValidOnes) {
+  for (const char* command : {"echo", "hz"}) {
+    const Result r = Dpc({"topic", command, "no_such_topic", "--domain", "90", "--timeout-s", "1"});
+    EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
+    EXPECT_NE(r.err.find("unknown topic \"no_such_topic\""), std::string::npos) << r.err;
+    for (const char* topic : {"dpc_stokes_sample", "dpc_waveplate_command", "dpc_waveplate_state",
+                              "dpc_controller_status", "dpc_device_description", "dpc_target",
+                              "dpc_target_request", "dpc_target_reply"}) {
+      EXPECT_NE(r.err.find(topic), std::string::npos) << command << " " << topic << "\n" << r.err;
+    }
+    EXPECT_TRUE(r.out.empty()) << r.out;
+  }
+}
+
+TEST_F(DpcTopicToolsTest, EchoAndHzTimeOutWithExit3WhenNothingArrives) {
+  const Result echo = Dpc({"topic", "echo", "dpc_waveplate_state", "--domain", "91", "--timeout-s", "1"});
+  EXPECT_EQ(echo.exit_code, 3) << echo.err;
+  EXPECT_NE(echo.err.find("no sample on dpc_waveplate_state"), std::string::npos) << echo.err;
+  const Result hz = Dpc({"topic", "hz", "sample", "--domain", "91", "--timeout-s", "1"});
+  EXPECT_EQ(hz.exit_code, 3) << hz.err;
+  EXPECT_NE(hz.err.find("no sample on dpc_stokes_sample"), std::string::npos) << hz.err;
+}
+
+TEST_F(DpcTopicToolsTest, TargetWithoutDriverTimesOutWithExit1) {
+  const Result r = Dpc({"target", "--point", "0", "0", "1", "--domain", "92", "--timeout-s", "1"});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("no driver on domain 92"), std::string::npos) << r.err;
+}
+
+TEST_F(DpcTopicToolsTest, BadCommandLinesExit2NamingTheFlag) {
+  struct Case {
+    std::vector<std::string> args;
+    std::string expected;
+  };
+  const std::vector<Case> cases = {
+      {{"target", "--point", "1", "1", "0"}, "--point: "},
+      {{"target", "--point", "0", "0", "0.9"}, "--point: "},
+      {{"target", "--point", "nan", "0", "1"}, "--point: "},
+      {{"target", "--set-normal", "0", "0", "1", "--offset", "1.5"}, "--offset: "},
+      {{"target", "--set-normal", "0", "0", "0"}, "--set-normal: "},
+      {{"target"}, "give the new target"},
+      {{"target", "--point", "0", "0", "1", "--linear"}, "excludes"},
+      {{"target", "--point", "0", "0", "1", "--bench-id", "*"}, "--bench-id"},
+      {{"monitor", "--bench-id", "*"}, "--bench-id"},
+      {{"topic", "echo", "state", "--domain", "300"}, "--domain"},
+  };
+  for (const Case& c : cases) {
+    std::vector<std::string> args = c.args;
+    if (std::find(args.begin(), args.end(), "--domain") == args.end()) {
+      args.insert(args.end(), {"--domain", "93"});
+    }
+    const Result r = Dpc(args);
+    std::string joined;
+    for (const auto& a : args) joined += a + " ";
+    EXPECT_EQ(r.exit_code, 2) << joined << "\n" << r.err;
+    EXPECT_NE((r.err + r.out).find(c.expected), std::string::npos) << joined << "\n" << r.err << r.out;
+  }
+}
+
+// ---- against a running bench
+
+TEST_F(DpcTopicToolsTest, TopicListShowsTheBenchTopicsWithWritersAndReaders) {
+  StartBench(81);
+  std::string out;
+  const std::regex sample_row(R"(dpc_stokes_sample\s+dpc::msg::StokesSample\s+(\d+)\s+(\d+))");
+  const std::regex state_row(R"(dpc_waveplate_state\s+dpc::msg::WaveplateState\s+(\d+)\s+(\d+))");
+  std::smatch m;
+  const bool listed = Eventually(
+      [&] {
+        const Result r = Dpc({"topic", "list", "--domain", "81", "--wait-s", "1.5"});
+        EXPECT_EQ(r.exit_code, 0) << r.err;
+        out = r.out;
+        for (const char* topic : {"dpc_stokes_sample", "dpc_waveplate_command", "dpc_waveplate_state",
+                                  "dpc_controller_status", "dpc_device_description", "dpc_target",
+                                  "dpc_target_request", "dpc_target_reply"}) {
+          if (out.find(topic) == std::string::npos) return false;
+        }
+        // Samples: the polarimeter writes; the controller reads (at least).
+        return std::regex_search(out, m, sample_row) && std::stoi(m[1]) == 1 && std::stoi(m[2]) >= 1;
+      },
+      30000ms);
+  ASSERT_TRUE(listed) << out;
+  ASSERT_TRUE(std::regex_search(out, m, state_row)) << out;
+  EXPECT_EQ(std::stoi(m[1]), 1) << out;   // the driver
+  EXPECT_GE(std::stoi(m[2]), 2) << out;   // controller and polarimeter
+  EXPECT_NE(out.find("dpc-driver/bench1"), std::string::npos) << out;
+  EXPECT_NE(out.find("dpc-controller/A"), std::string::npos) << out;
+  // A topic nobody uses here does not appear.
+  EXPECT_EQ(out.find("rt/"), std::string::npos) << out;
+}
+
+TEST_F(DpcTopicToolsTest, EchoStateJsonPrintsCompleteObjects) {
+  StartBench(82);
+  const Result r = Dpc({"topic", "echo", "state", "--json", "--count", "3", "--timeout-s", "20",
+                        "--domain", "82"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto lines = Lines(r.out);
+  ASSERT_EQ(lines.size(), 3u) << r.out;
+  uint64_t previous = 0;
+  for (const std::string& line : lines) {
+    const auto j = nlohmann::json::parse(line);  // throws (fails the test) if not JSON
+    for (const char* key : {"bench_id", "sequence_number", "answers_sample", "sample_time_ns",
+                            "sample_publish_time_ns", "command_receive_time_ns", "publish_time_ns",
+                            "phi_applied", "saturated", "mode", "reason", "obeyed_controller_id",
+                            "obeyed_priority", "commands_applied", "commands_rejected",
+                            "commands_limited", "controller_switches", "last_rejection"}) {
+      EXPECT_TRUE(j.contains(key)) << key << " missing in " << line;
+    }
+    EXPECT_EQ(j.size(), 18u) << line;
+    EXPECT_EQ(j["bench_id"], "bench1");
+    ASSERT_TRUE(j["phi_applied"].is_array());
+    EXPECT_EQ(j["phi_applied"].size(), 3u) << line;  // the default bench: 3 stages
+    EXPECT_EQ(j["saturated"].size(), 3u) << line;
+    EXPECT_TRUE(j["mode"] == "DRIVER_ACTIVE" || j["mode"] == "DRIVER_HOLDING") << line;
+    const uint64_t sequence = j["sequence_number"].get<uint64_t>();
+    EXPECT_GT(sequence, previous) << line;
+    previous = sequence;
+  }
+  // The readable form: one line per sample, with the mode and units.
+  const Result text = Dpc({"topic", "echo", "dpc_waveplate_state", "--count", "2", "--timeout-s", "20",
+                           "--domain", "82"});
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  const auto text_lines = Lines(text.out);
+  ASSERT_EQ(text_lines.size(), 2u) << text.out;
+  EXPECT_NE(text_lines[0].find("[bench1] state #"), std::string::npos) << text.out;
+  EXPECT_NE(text_lines[0].find("phi_applied=["), std::string::npos) << text.out;
+  // Another bench id sees nothing.
+  const Result other = Dpc({"topic", "echo", "state", "--bench-id", "bench2", "--timeout-s", "1.5",
+                            "--domain", "82"});
+  EXPECT_EQ(other.exit_code, 3) << other.out << other.err;
+  EXPECT_TRUE(other.out.empty()) << other.out;
+}
+
+TEST_F(DpcTopicToolsTest, HzOfSamplesIsNearThePolarimeterRate) {
+  StartBench(83, 200);
+  const Result r = Dpc({"topic", "hz", "sample", "--window-s", "1", "--count-windows", "3", "--json",
+                        "--timeout-s", "20", "--domain", "83"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto lines = Lines(r.out);
+  ASSERT_EQ(lines.size(), 3u) << r.out;
+  double rate_sum_hz = 0;
+  for (size_t i = 1; i < lines.size(); ++i) {  // the first window may see discovery effects
+    const auto j = nlohmann::json::parse(lines[i]);
+    EXPECT_EQ(j["topic"], "dpc_stokes_sample");
+    const double rate_hz = j["rate_hz"].get<double>();
+    rate_sum_hz += rate_hz;
+    ASSERT_TRUE(j["interval_ms"].is_object()) << lines[i];
+    const double min_ms = j["interval_ms"]["min"], mean_ms = j["interval_ms"]["mean"],
+                 max_ms = j["interval_ms"]["max"];
+    EXPECT_LE(min_ms, mean_ms);
+    EXPECT_LE(mean_ms, max_ms);
+    EXPECT_NEAR(mean_ms, 1000.0 / rate_hz, 0.5) << lines[i];
+  }
+  EXPECT_NEAR(rate_sum_hz / 2, 200.0, 40.0) << r.out;
+  // The text form.
+  const Result text = Dpc({"topic", "hz", "dpc_stokes_sample", "--window-s", "0.5", "--count-windows",
+                           "1", "--timeout-s", "20", "--domain", "83"});
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_TRUE(std::regex_search(text.out, std::regex(R"(dpc_stokes_sample: rate_hz=\d+\.\d samples=\d+ window_s=0\.5 interval_ms min=[\d.]+ mean=[\d.]+ max=[\d.]+)")))
+      << text.out;
+}
+
+TEST_F(DpcTopicToolsTest, TargetPointIsAcceptedAndPublishedAsRevision2) {
+  StartBench(84);
+  // Revision 1: the scenario's target.
+  const Result before = Dpc({"topic", "echo", "target", "--json", "--count", "1", "--timeout-s", "20",
+                             "--domain", "84"});
+  ASSERT_EQ(before.exit_code, 0) << before.err;
+  EXPECT_EQ(nlohmann::json::parse(before.out)["revision"], 1) << before.out;
+
+  const Result r = Dpc({"target", "--point", "0", "0", "1", "--domain", "84"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("accepted: bench bench1 target revision 2: point [+0.0000, +0.0000, +1.0000]"),
+            std::string::npos)
+      << r.out;
+  const std::smatch m = [&] {
+    std::smatch match;
+    std::regex_search(r.out, match, std::regex(R"(request (dpc-target-\d+-\d+))"));
+    return match;
+  }();
+  ASSERT_EQ(m.size(), 2u) << r.out;
+  const std::string request_id = m[1];
+
+  const Result after = Dpc({"topic", "echo", "target", "--json", "--count", "1", "--timeout-s", "20",
+                            "--domain", "84"});
+  ASSERT_EQ(after.exit_code, 0) << after.err;
+  const auto j = nlohmann::json::parse(after.out);
+  EXPECT_EQ(j["revision"], 2) << after.out;
+  EXPECT_EQ(j["kind"], "TARGET_POINT") << after.out;
+  EXPECT_EQ(j["request_id"], request_id) << after.out;
+  ASSERT_EQ(j["point"].size(), 3u);
+  EXPECT_DOUBLE_EQ(j["point"][0].get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(j["point"][1].get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(j["point"][2].get<double>(), 1.0);
+
+  // A set target: revision 3.
+  const Result linear = Dpc({"target", "--linear", "--domain", "84"});
+  ASSERT_EQ(linear.exit_code, 0) << linear.err;
+  EXPECT_NE(linear.out.find("revision 3: set [+0.0000, +0.0000, +1.0000]·S = 0.0000"), std::string::npos)
+      << linear.out;
+}
+
+TEST_F(DpcTopicToolsTest, InvalidTargetIsRefusedBeforeAnythingIsSent) {
+  StartBench(85);
+  AwaitObeyed(85, "A");
+  const Result r = Dpc({"target", "--point", "1", "1", "0", "--domain", "85"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--point: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("nothing sent"), std::string::npos) << r.err;
+  // The driver saw no request: the target is still the scenario's, and it logged none.
+  const Result target = Dpc({"topic", "echo", "target", "--json", "--count", "1", "--timeout-s", "20",
+                             "--domain", "85"});
+  ASSERT_EQ(target.exit_code, 0) << target.err;
+  EXPECT_EQ(nlohmann::json::parse(target.out)["revision"], 1) << target.out;
+  const std::string driver_log = Slurp(dir_ / "driver.err");
+  EXPECT_EQ(driver_log.find("target request"), std::string::npos) << driver_log;
+  EXPECT_EQ(driver_log.find("target revision"), std::string::npos) << driver_log;
+}
+
+TEST_F(DpcTopicToolsTest, MonitorLinesNameTheObeyedController) {
+  StartBench(86);
+  AwaitObeyed(86, "A");
+  const Result r = Dpc({"monitor", "--lines", "--duration-s", "2", "--domain", "86"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto lines = Lines(r.out);
+  ASSERT_GE(lines.size(), 8u) << r.out;   // 5 Hz for 2 s
+  ASSERT_LE(lines.size(), 12u) << r.out;
+  int obeyed = 0;
+  const std::regex status(
+      R"(^error_deg ([\d.]+) \(max ([\d.]+)\) \| phi \[[-+\d., ]+\] \| rate_hz ([\d.]+) \| ACTIVE obeyed A \(priority 0\) \| missed_deadlines A=\d+ \| target r1$)");
+  std::smatch m;
+  for (size_t i = 1; i < lines.size(); ++i) {  // the first may precede the first state
+    if (!std::regex_match(lines[i], m, status)) continue;
+    ++obeyed;
+    EXPECT_LE(std::stod(m[1]), std::stod(m[2])) << lines[i];
+    EXPECT_LT(std::stod(m[2]), 180.0) << lines[i];
+    EXPECT_GT(std::stod(m[3]), 50.0) << lines[i];   // 200 Hz polarimeter
+    EXPECT_LT(std::stod(m[3]), 400.0) << lines[i];
+  }
+  EXPECT_GE(obeyed, static_cast<int>(lines.size()) - 3) << r.out;
+  EXPECT_EQ(r.out.find('\r'), std::string::npos) << "not a terminal: no redraw";
+}
+
+TEST_F(DpcTopicToolsTest, MonitorStopsCleanlyOnSigint) {
+  StartBench(87);
+  Process monitor({DPC_BINARY, "monitor", "--domain", "87", "--rate-hz", "10"}, dir_ / "monitor.out",
+                  dir_ / "monitor.err");
+  ASSERT_TRUE(Eventually([&] { return Lines(monitor.out()).size() >= 3; }, 20000ms)) << monitor.err();
+  monitor.Signal(SIGINT);
+  const auto code = monitor.Wait(10000ms);
+  ASSERT_TRUE(code.has_value()) << "monitor ignored SIGINT";
+  EXPECT_EQ(*code, 0) << monitor.err();
+  EXPECT_NE(monitor.err().find("stopped by signal"), std::string::npos) << monitor.err();
+}
+
+}  // namespace

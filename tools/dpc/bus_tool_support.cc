@@ -1,0 +1,62 @@
+#include "bus_tool_support.h"
+
+#include <thread>
+
+namespace dpc::tools {
+namespace {
+
+std::atomic<bool> g_stop_requested{false};
+
+extern "C" void OnStopSignal(int) { g_stop_requested.store(true); }
+
+}  // namespace
+
+void AddBusToolOptions(CLI::App& command, BusToolOptions* options, const char* bench_help) {
+  command.add_option("--domain", options->domain_id, "DDS domain id")
+      ->check(CLI::Range(0, 232))
+      ->capture_default_str();
+  if (bench_help != nullptr) {
+    command.add_option("--bench-id", options->bench_id, bench_help)->capture_default_str();
+  }
+}
+
+std::string BenchFilter(const std::string& bench_id) {
+  return bench_id == "*" ? std::string() : bench_id;
+}
+
+StopSignals::StopSignals() {
+  g_stop_requested.store(false);
+  struct sigaction action {};
+  action.sa_handler = OnStopSignal;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, &old_int_);
+  sigaction(SIGTERM, &action, &old_term_);
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  sigemptyset(&ignore.sa_mask);
+  sigaction(SIGPIPE, &ignore, &old_pipe_);
+}
+
+StopSignals::~StopSignals() {
+  sigaction(SIGINT, &old_int_, nullptr);
+  sigaction(SIGTERM, &old_term_, nullptr);
+  sigaction(SIGPIPE, &old_pipe_, nullptr);
+}
+
+bool StopSignals::requested() { return g_stop_requested.load(); }
+
+bool WaitFor(const std::function<bool()>& done, double timeout_s) {
+  const auto start = std::chrono::steady_clock::now();
+  while (true) {
+    if (done()) return true;
+    if (StopSignals::requested()) return false;
+    if (timeout_s > 0 && SecondsSince(start) >= timeout_s) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+}
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace dpc::tools

@@ -1,0 +1,55 @@
+#pragma once
+// What the DDS commands of `dpc` (topic, target, monitor) share: --domain and --bench-id, clean
+// stop on SIGINT/SIGTERM (so that the DDS entities are deleted and no /dev/shm segment stays
+// behind), and waiting on a condition with a deadline.
+
+#include <CLI/CLI.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <functional>
+#include <string>
+
+namespace dpc::tools {
+
+/// Exit code of `dpc topic echo` / `hz` when nothing arrived before --timeout-s.
+inline constexpr int kExitNoData = 3;
+
+struct BusToolOptions {
+  int domain_id = 0;
+  std::string bench_id = "bench1";
+};
+
+/// Adds --domain (0…232) and, if `bench_help` is not null, --bench-id with that help text.
+void AddBusToolOptions(CLI::App& command, BusToolOptions* options, const char* bench_help);
+
+/// The bench filter for bus::BusParticipant::MakeReader: "" (all benches) for "" or "*".
+std::string BenchFilter(const std::string& bench_id);
+
+/// While alive, SIGINT and SIGTERM set a flag instead of killing the process (and SIGPIPE is
+/// ignored, so that `dpc topic echo … | head` ends cleanly too). Restores the old handlers.
+class StopSignals {
+ public:
+  StopSignals();
+  ~StopSignals();
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+
+  /// True once SIGINT or SIGTERM arrived.
+  static bool requested();
+
+ private:
+  struct sigaction old_int_ {};
+  struct sigaction old_term_ {};
+  struct sigaction old_pipe_ {};
+};
+
+/// Polls `done` every few milliseconds until it is true (returns true), the deadline passes or a
+/// stop signal arrives (returns false). A zero or negative `timeout_s` means no deadline.
+bool WaitFor(const std::function<bool()>& done, double timeout_s);
+
+/// Seconds since `start` on the steady clock.
+double SecondsSince(std::chrono::steady_clock::time_point start);
+
+}  // namespace dpc::tools
