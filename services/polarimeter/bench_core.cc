@@ -40,7 +40,10 @@ BenchCore::BenchCore(ScenarioConfig scenario, BenchSettings settings)
     scenario_.controller.activation_s = 0.0;
     scenario_.controller.dither.reset_duration_s =
         std::max(scenario_.controller.dither.reset_duration_s, 1.0 / settings_.rate_hz);
-    if (settings_.duration_s > 0.0) scenario_.simulation.duration_s = settings_.duration_s;
+    // Until stopped: validate as a long run (the scenario's duration and settle_samples were
+    // written for its own rate, e.g. 1 s, which a slow polarimeter would not even fill).
+    scenario_.simulation.duration_s = settings_.duration_s > 0.0 ? settings_.duration_s : 1e6;
+    scenario_.simulation.settle_samples = 0;  // real time settles by --settle-s instead
   }
   ValidateScenario(scenario_);
   chain_ = std::make_unique<WaveplateChain>(BuildChain(scenario_.stages));

@@ -371,13 +371,15 @@ TEST_F(BenchProcessTest, MalformedCommandsAndSamplesAreCountedAndNeverApplied) {
     c.phi(std::move(phi));
     return c;
   };
-  const uint64_t rejected_before = LatestState()->commands_rejected();
-  commands->Write(bad_command({NAN, 0.0, 0.0}));
-  commands->Write(bad_command({0.1, 0.2}));                         // wrong stage count
-  commands->Write(bad_command(std::vector<double>(17, 0.0)));       // oversized
-  commands->Write(bad_command({INFINITY, 0.0, 0.0}));
-  ASSERT_TRUE(WaitUntil([&] { return LatestState()->commands_rejected() >= rejected_before + 4; }, 5s))
-      << Logs();
+  // One at a time: the writer keeps only its latest sample (KEEP_LAST 1), so back-to-back writes
+  // could replace one another before they are sent.
+  for (const auto& phi : {std::vector<double>{NAN, 0.0, 0.0}, std::vector<double>{0.1, 0.2},
+                          std::vector<double>(17, 0.0), std::vector<double>{INFINITY, 0.0, 0.0}}) {
+    const uint64_t rejected_before = LatestState()->commands_rejected();
+    commands->Write(bad_command(phi));
+    ASSERT_TRUE(WaitUntil([&] { return LatestState()->commands_rejected() > rejected_before; }, 5s))
+        << phi.size() << " values: " << Logs();
+  }
   const auto state = LatestState();
   EXPECT_TRUE(Obeys("A")) << state->reason().to_string();
   for (double v : state->phi_applied()) EXPECT_TRUE(std::isfinite(v));
@@ -389,6 +391,10 @@ TEST_F(BenchProcessTest, MalformedCommandsAndSamplesAreCountedAndNeverApplied) {
   sample.s_in({1.0, 1.0, 0.0});   // not unit
   sample.s_out({1.0, 0.0, 0.0});
   samples->Write(sample);
+  ASSERT_TRUE(WaitUntil([&] {
+    auto status = Status("A");
+    return status && status->rejected_samples() >= 1;
+  }, 5s)) << Logs();
   sample.s_in({NAN, 0.0, 0.0});
   samples->Write(sample);
   ASSERT_TRUE(WaitUntil([&] {
