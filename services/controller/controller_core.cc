@@ -136,6 +136,13 @@ std::optional<msg::WaveplateCommand> ControllerCore::OnSample(const msg::StokesS
     return std::nullopt;
   }
   if (!configured()) return std::nullopt;
+  if (sample.sequence_number() == last_sample_ && last_command_ &&
+      last_command_->answers_sample() == last_sample_) {
+    // The same sample again: a lockstep bench re-publishes when its answer was lost (the
+    // periodic topics are best effort). Answer it again, without integrating twice.
+    last_command_->publish_time_ns(wall_ns);
+    return last_command_;
+  }
   if (sample.sequence_number() <= last_sample_) {
     // Out of order or repeated (a restarted bench starts again at 1: accept after a gap).
     if (now_ns - last_sample_ns_ < static_cast<int64_t>(settings_.freeze_after_s * 1e9)) return std::nullopt;
@@ -191,6 +198,7 @@ std::optional<msg::WaveplateCommand> ControllerCore::OnSample(const msg::StokesS
   command.phi().assign(phi.data(), phi.data() + phi.size());
   command.publish_time_ns(wall_ns);
   last_answered_sample_ = sample.sequence_number();
+  last_command_ = command;
   return command;
 }
 

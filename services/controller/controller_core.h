@@ -90,6 +90,7 @@ class ControllerCore {
   bool law_for_point_ = true;        ///< the law was built for a point target
   ControlVector applied_phi_;
   uint64_t last_answered_sample_ = 0;  ///< of this controller's latest command
+  std::optional<msg::WaveplateCommand> last_command_;
   uint64_t last_sample_ = 0;
   int64_t last_sample_ns_ = 0;
   uint64_t sequence_ = 0;

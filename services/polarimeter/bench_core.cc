@@ -221,7 +221,7 @@ BenchReport BenchCore::RunRealTime(BenchLink* link, SimulationObserver* observer
   report.result.samples_per_s = wall_s > 0.0 ? static_cast<double>(k) / wall_s : 0.0;
   report.result.final_phi = phi;
   report.achieved_rate_hz = report.result.samples_per_s;
-  if (report.stop_reason.empty()) report.stop_reason = "end of --duration-s";
+  if (report.stop_reason.empty()) report.stop_reason = "end of --run-s";
   return report;
 }
 

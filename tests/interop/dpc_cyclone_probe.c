@@ -175,14 +175,17 @@ static void usage(FILE *out) {
 }
 
 static dds_entity_t make_reader(dds_entity_t participant, const dds_topic_descriptor_t *descriptor,
-                                const char *name, bool transient_local, int32_t depth) {
+                                const char *name, bool transient_local, int32_t depth,
+                                bool reliable) {
   const dds_entity_t topic = dds_create_topic(participant, descriptor, name, NULL, NULL);
   if (topic < 0) {
     fprintf(stderr, "dds_create_topic(%s): %s\n", name, dds_strretcode(-topic));
     exit(3);
   }
   dds_qos_t *qos = dds_create_qos();
-  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+  /* The bench's QoS (deploy/fastdds/loopback.xml): the periodic topics are best effort. */
+  dds_qset_reliability(qos, reliable ? DDS_RELIABILITY_RELIABLE : DDS_RELIABILITY_BEST_EFFORT,
+                       DDS_SECS(1));
   dds_qset_durability(qos, transient_local ? DDS_DURABILITY_TRANSIENT_LOCAL : DDS_DURABILITY_VOLATILE);
   dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, depth);
   const dds_entity_t reader = dds_create_reader(participant, topic, qos, NULL);
@@ -268,12 +271,12 @@ int main(int argc, char **argv) {
     return 3;
   }
   const dds_entity_t descriptions =
-      make_reader(participant, &dpc_msg_DeviceDescription_desc, "dpc_device_description", true, 1);
-  const dds_entity_t targets = make_reader(participant, &dpc_msg_Target_desc, "dpc_target", true, 1);
+      make_reader(participant, &dpc_msg_DeviceDescription_desc, "dpc_device_description", true, 1, true);
+  const dds_entity_t targets = make_reader(participant, &dpc_msg_Target_desc, "dpc_target", true, 1, true);
   const dds_entity_t states =
-      make_reader(participant, &dpc_msg_WaveplateState_desc, "dpc_waveplate_state", false, 1);
+      make_reader(participant, &dpc_msg_WaveplateState_desc, "dpc_waveplate_state", false, 1, false);
   const dds_entity_t replies =
-      make_reader(participant, &dpc_msg_TargetReply_desc, "dpc_target_reply", false, 8);
+      make_reader(participant, &dpc_msg_TargetReply_desc, "dpc_target_reply", false, 8, true);
 
   dds_entity_t request_writer = 0;
   if (request) {
