@@ -8,9 +8,9 @@
 // Sections:
 //   raw      ping-pong: StokesSample out, WaveplateState back, the bench's QoS profiles, between
 //            two processes; one hop = round trip / 2
-//   loop     lockstep bench: sample published → command received at the driver (two hops:
-//            polarimeter → controller → driver, plus the controller's update) and → state
-//            published; per hop = (sample → command at the driver) / 2
+//   loop     lockstep bench, then real time at 1 kHz: sample published → command received at
+//            the driver (two hops: polarimeter → controller → driver, plus the controller's
+//            update) and → state published; per hop = (sample → command at the driver) / 2
 //   rate     real time at 5, 10, 15, 20 kHz: overruns and missed deadlines over the run
 //   failover kill -9 of the obeyed controller with a standby: gap between the last command of
 //            the killed one and the first of the standby applied by the driver
@@ -192,18 +192,29 @@ struct StateLog {
   }
 };
 
-void LoopLatency(double seconds, const Percentiles& raw) {
+/// `lockstep`: each sample waits for the state answering the previous one (the answer to a
+/// sample and the next sample reach the controller together); otherwise real time at
+/// `rate_hz`, where at a low rate nothing overlaps.
+void LoopLatency(double seconds, const Percentiles& raw, bool lockstep, double rate_hz) {
   StateLog log;
   Services services;
   services.Driver();
   services.Controller("A", 0);
-  ChildProcess& polarimeter = services.Polarimeter({"--lockstep", "--duration-s", fmt::format("{}", seconds), "--json"});
+  if (!lockstep) std::this_thread::sleep_for(1s);  // let the controller match first
+  ChildProcess& polarimeter = services.Polarimeter(
+      lockstep ? std::vector<std::string>{"--lockstep", "--duration-s", fmt::format("{}", seconds), "--json"}
+               : std::vector<std::string>{"--rate-hz", fmt::format("{}", rate_hz), "--run-s",
+                                          fmt::format("{}", seconds), "--json"});
   polarimeter.Wait(std::chrono::seconds(static_cast<int64_t>(600)));
   std::vector<double> to_driver, to_state;
   {
     std::lock_guard<std::mutex> lock(log.mutex);
+    uint64_t previous = 0;
     for (const auto& s : log.states) {
-      if (s.answers_sample() == 0 || s.sample_publish_time_ns() == 0) continue;
+      // Only states of newly applied commands: the driver's switch and hold notices repeat the
+      // last command's times.
+      if (s.answers_sample() == 0 || s.sample_publish_time_ns() == 0 || s.answers_sample() == previous) continue;
+      previous = s.answers_sample();
       to_driver.push_back(static_cast<double>(s.command_receive_time_ns() - s.sample_publish_time_ns()));
       to_state.push_back(static_cast<double>(s.publish_time_ns() - s.sample_publish_time_ns()));
     }
@@ -212,8 +223,12 @@ void LoopLatency(double seconds, const Percentiles& raw) {
   for (double v : to_driver) per_hop.push_back(v / 2.0);
   const Percentiles hop = Summarize(per_hop);
   const nlohmann::json report = LastJsonLine(polarimeter.Log());
-  fmt::print("loop (lockstep, {:.0f} samples/s across the three processes)\n",
-             report.is_object() ? report["bench"]["achieved_rate_hz"].get<double>() : NAN);
+  if (lockstep) {
+    fmt::print("loop, lockstep ({:.0f} samples/s across the three processes)\n",
+               report.is_object() ? report["bench"]["achieved_rate_hz"].get<double>() : NAN);
+  } else {
+    fmt::print("loop, real time at {:.0f} Hz\n", rate_hz);
+  }
   fmt::print("  sample → command at driver      {}\n", Us(Summarize(to_driver)));
   fmt::print("  sample → state published        {}\n", Us(Summarize(to_state)));
   fmt::print("  per hop (→ driver / 2)          {}\n", Us(hop));
@@ -360,7 +375,10 @@ int main(int argc, char** argv) {
     raw = dpc::RawPingPong(self, quick ? 3000 : 20000);
     fmt::print("raw Fast DDS ping-pong (StokesSample → WaveplateState, bench QoS), one hop: {}\n", dpc::Us(raw));
   }
-  if (want("loop")) dpc::LoopLatency(quick ? 0.5 : 3.0, raw);
+  if (want("loop")) {
+    dpc::LoopLatency(quick ? 0.5 : 3.0, raw, true, 0.0);
+    dpc::LoopLatency(quick ? 3.0 : 20.0, raw, false, 1000.0);
+  }
   if (want("failover")) dpc::Failover(quick ? 3 : 10);
   if (want("tracking")) dpc::Tracking(quick ? 3.0 : 10.0);
   if (want("rate")) dpc::Rates(quick ? 10.0 : 60.0);
