@@ -375,13 +375,24 @@ int main(int argc, char** argv) {
     raw = dpc::RawPingPong(self, quick ? 3000 : 20000);
     fmt::print("raw Fast DDS ping-pong (StokesSample → WaveplateState, bench QoS), one hop: {}\n", dpc::Us(raw));
   }
+  std::fflush(stdout);  // each section's figures as they come, also into a file or pipe
   if (want("loop")) {
     dpc::LoopLatency(quick ? 0.5 : 3.0, raw, true, 0.0);
     dpc::LoopLatency(quick ? 3.0 : 20.0, raw, false, 1000.0);
+    std::fflush(stdout);
   }
-  if (want("failover")) dpc::Failover(quick ? 3 : 10);
-  if (want("tracking")) dpc::Tracking(quick ? 3.0 : 10.0);
-  if (want("rate")) dpc::Rates(quick ? 10.0 : 60.0);
+  if (want("failover")) {
+    dpc::Failover(quick ? 3 : 10);
+    std::fflush(stdout);
+  }
+  if (want("tracking")) {
+    dpc::Tracking(quick ? 3.0 : 10.0);
+    std::fflush(stdout);
+  }
+  if (want("rate")) {
+    dpc::Rates(quick ? 10.0 : 60.0);
+    std::fflush(stdout);
+  }
   if (want("memory")) dpc::Memory(quick ? 60.0 : 600.0);
   return 0;
 }

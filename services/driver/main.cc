@@ -86,7 +86,8 @@ int Run(int argc, char** argv) {
     target_writer->Write(bus::TargetMessage(scenario.target, common.bench_id, target_revision, ""));
 
     std::string last_reason;
-    auto publish = [&](const msg::WaveplateState& state) {
+    auto publish = [&](msg::WaveplateState state) {
+      state.publish_time_ns(bus::WallClockNs());  // after applying: the loop's last timestamp
       state_writer->Write(state);
       if (state.reason() != last_reason) {
         last_reason = state.reason();
