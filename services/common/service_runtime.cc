@@ -52,6 +52,14 @@ void SetUpLogging(const std::string& service, const CommonOptions& options) {
   spdlog::set_default_logger(logger);
 }
 
+void RejectionLog::Update(uint64_t count, const std::string& last_reason) {
+  if (count == reported_) return;
+  if (reported_ == 0 || count / kEvery != reported_ / kEvery) {
+    spdlog::warn("{} #{}: {}", what_, count, last_reason);
+  }
+  reported_ = count;
+}
+
 ShutdownSignals::ShutdownSignals() {
   sigset_t set;
   sigemptyset(&set);

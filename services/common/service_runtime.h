@@ -45,6 +45,20 @@ std::string DescribeError(const ScenarioError& error, const CommonOptions& optio
 /// unknown level.
 void SetUpLogging(const std::string& service, const CommonOptions& options);
 
+/// Logs rejected input without letting a flood of it stall the loop: the first rejection, then
+/// one line per kEvery more, each with the running count and the latest reason.
+class RejectionLog {
+ public:
+  static constexpr uint64_t kEvery = 1000;
+  explicit RejectionLog(std::string what) : what_(std::move(what)) {}
+  /// Call after anything that may have rejected input, with the total so far.
+  void Update(uint64_t count, const std::string& last_reason);
+
+ private:
+  std::string what_;
+  uint64_t reported_ = 0;
+};
+
 /// SIGINT and SIGTERM as a request to stop. Construct on the main thread before any other
 /// thread starts (Fast DDS's included): the signals are blocked in every thread and collected
 /// by Wait. SIGPIPE is ignored.

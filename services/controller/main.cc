@@ -79,12 +79,13 @@ int Run(int argc, char** argv) {
             spdlog::info("target revision {}", target.revision());
           }
         });
+    RejectionLog rejections("rejected sample or state");
     auto states = participant.MakeReader<msg::WaveplateState>(
         common.bench_id, [&](const msg::WaveplateState& state, const auto&) {
           std::lock_guard<std::mutex> lock(mutex);
           core.OnState(state);
+          rejections.Update(core.rejected_samples(), core.last_rejection());
         });
-    uint64_t reported_rejections = 0;
     std::unique_ptr<bus::Reader<msg::StokesSample>> samples;
     samples = participant.MakeReader<msg::StokesSample>(
         common.bench_id, [&](const msg::StokesSample& sample, const auto&) {
@@ -93,12 +94,7 @@ int Run(int argc, char** argv) {
           if (auto command = core.OnSample(sample, bus::MonotonicNs(), wall_ns)) {
             command_writer->Write(*command);
           }
-          if (core.rejected_samples() != reported_rejections) {
-            if (reported_rejections == 0 || core.rejected_samples() % 1000 == 0) {
-              spdlog::warn("rejected sample #{}: {}", core.rejected_samples(), core.last_rejection());
-            }
-            reported_rejections = core.rejected_samples();
-          }
+          rejections.Update(core.rejected_samples(), core.last_rejection());
         });
     spdlog::info("law {}, priority {}, profiles {}, domain {}",
                  MethodName(settings.controller.method), settings.priority,

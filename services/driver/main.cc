@@ -102,19 +102,13 @@ int Run(int argc, char** argv) {
       std::lock_guard<std::mutex> lock(mutex);
       publish(core.State(bus::WallClockNs()));
     }
-    uint64_t reported_rejections = 0;
+    RejectionLog rejections("rejected command");
     auto commands = participant.MakeReader<msg::WaveplateCommand>(
         common.bench_id, [&](const msg::WaveplateCommand& command, const auto&) {
           const int64_t wall_ns = bus::WallClockNs();
           std::lock_guard<std::mutex> lock(mutex);
           if (auto state = core.OnCommand(command, bus::MonotonicNs(), wall_ns)) publish(*state);
-          if (core.commands_rejected() != reported_rejections) {
-            // Log the first rejection and then one in a thousand: a flood must not stall the loop.
-            if (reported_rejections == 0 || core.commands_rejected() % 1000 == 0) {
-              spdlog::warn("rejected command #{}: {}", core.commands_rejected(), core.last_rejection());
-            }
-            reported_rejections = core.commands_rejected();
-          }
+          rejections.Update(core.commands_rejected(), core.last_rejection());
         });
     auto requests = participant.MakeReader<msg::TargetRequest>(
         common.bench_id, [&](const msg::TargetRequest& request, const auto&) {

@@ -97,9 +97,7 @@ class DdsBenchLink final : public BenchLink {
   void OnState(const msg::WaveplateState& state) {
     if (std::string reason = bench_->CheckApplied(state); !reason.empty()) {
       std::lock_guard<std::mutex> lock(mutex_);
-      if (rejected_states_++ == 0 || rejected_states_ % 1000 == 0) {
-        spdlog::warn("rejected state #{}: {}", rejected_states_, reason);
-      }
+      rejections_.Update(++rejected_states_, reason);
       return;
     }
     ControlVector phi(static_cast<int>(state.phi_applied().size()));
@@ -139,6 +137,7 @@ class DdsBenchLink final : public BenchLink {
   std::optional<TargetConfig> target_change_;
   uint64_t target_revision_ = 1;  // revision 1 is the scenario's target, the bench's own
   uint64_t rejected_states_ = 0;
+  RejectionLog rejections_{"rejected state"};
   uint64_t stop_polls_ = 0;
 };
 
