@@ -12,9 +12,11 @@
 //   loop     lockstep bench, then real time at 1 kHz: sample published → command received at
 //            the driver (two hops: polarimeter → controller → driver, plus the controller's
 //            update) and → state published; per hop = (sample → command at the driver) / 2
-//   rate     real time at 5, 10, 15, 20 kHz: overruns and missed deadlines over the run
+//   rate     real time at 5, 10, 15, 20 kHz: overruns and missed deadlines over the run; the
+//            raw reference: samples paced at the same rate, echoed by a second process
 //   failover kill -9 of the obeyed controller with a standby: gap between the last command of
-//            the killed one and the first of the standby applied by the driver
+//            the killed one and the first of the standby applied by the driver; the raw DDS
+//            reference: kill -9 of the stronger of two EXCLUSIVE-ownership writers
 //   tracking real time at 10 kHz, the scrambler at increasing rates: mean error
 //   memory   RSS of each service at the start and the end of a long 10 kHz run
 
@@ -23,6 +25,7 @@
 #include <time.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -251,7 +254,59 @@ void LoopLatency(double seconds, const Percentiles& raw, bool lockstep, double r
              hop.p50 / raw.p50, hop.p99 / raw.p99, hop.p999 / raw.p999);
 }
 
-void Rates(double seconds) {
+
+struct RawRateResult {
+  double achieved_hz = 0.0;
+  int64_t late_periods = 0;
+  double answered_fraction = 0.0;
+};
+
+/// The raw reference for the real-time rate: StokesSample paced at `rate_hz` (absolute sleeps,
+/// late periods counted as the polarimeter does), each echoed as a WaveplateState by a second
+/// process, without waiting for the echoes.
+RawRateResult RawRate(const std::string& self, double rate_hz, double seconds) {
+  ChildProcess pong({self, "--pong", "--domain", std::to_string(g_domain)}, g_dir + "/pong_rate.log");
+  bus::BusParticipant participant({g_domain, "dpc-bench-rate"});
+  auto writer = participant.MakeWriter<msg::StokesSample>();
+  std::atomic<uint64_t> answers{0};
+  auto reader = participant.MakeReader<msg::WaveplateState>("", [&](const msg::WaveplateState&, const auto&) {
+    answers.fetch_add(1, std::memory_order_relaxed);
+  });
+  WaitUntil([&] { return writer->matched_readers() > 0 && reader->counters().matched_writers.load() > 0; }, 20s);
+  std::this_thread::sleep_for(200ms);
+  prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
+  msg::StokesSample sample;
+  sample.bench_id("bench1");
+  sample.s_in({1, 0, 0});
+  sample.s_out({1, 0, 0});
+  const int64_t period_ns = static_cast<int64_t>(1e9 / rate_hz);
+  const int64_t total = static_cast<int64_t>(rate_hz * seconds);
+  RawRateResult result;
+  const int64_t start_ns = bus::MonotonicNs();
+  int64_t next_ns = start_ns;
+  for (int64_t k = 1; k <= total; ++k) {
+    const timespec ts{static_cast<time_t>(next_ns / 1000000000), static_cast<long>(next_ns % 1000000000)};
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    }
+    const int64_t now_ns = bus::MonotonicNs();
+    if (now_ns - next_ns > period_ns) {
+      result.late_periods += (now_ns - next_ns) / period_ns;
+      next_ns = now_ns;
+    }
+    next_ns += period_ns;
+    sample.sequence_number(static_cast<uint64_t>(k));
+    sample.publish_time_ns(bus::WallClockNs());
+    writer->Write(sample);
+  }
+  const double wall_s = static_cast<double>(bus::MonotonicNs() - start_ns) * 1e-9;
+  std::this_thread::sleep_for(100ms);
+  reader.reset();
+  result.achieved_hz = static_cast<double>(total) / wall_s;
+  result.answered_fraction = static_cast<double>(answers.load()) / static_cast<double>(total);
+  return result;
+}
+
+void Rates(double seconds, const std::string& self) {
   fmt::print("real-time rate ({:.0f} s each; goal: ≥ 20 kHz held with zero missed deadlines)\n", seconds);
   for (double rate : {5e3, 10e3, 15e3, 20e3}) {
     Services services;
@@ -271,10 +326,125 @@ void Rates(double seconds) {
                "error mean {:.3f}°\n",
                rate, b["achieved_rate_hz"].get<double>(), b["overruns"].get<int64_t>(),
                b["state_deadline_misses"].get<int64_t>(), r["error_deg"]["mean"].is_null() ? NAN : r["error_deg"]["mean"].get<double>());
+    services.StopAll();
+    const RawRateResult raw = RawRate(self, rate, seconds);
+    fmt::print("          raw DDS (sample out, echo back, same QoS): achieved {:8.1f} Hz, {} late periods, "
+               "{:.1f} % echoed\n",
+               raw.achieved_hz, raw.late_periods, 100.0 * raw.answered_fraction);
   }
 }
 
-void Failover(int repetitions) {
+
+// ---- raw DDS failover: EXCLUSIVE ownership, what DDS alone offers -------------------------
+
+namespace fdds = eprosima::fastdds::dds;
+
+/// A raw writer of StokesSample at `rate_hz` with EXCLUSIVE ownership of `strength` (the bench's
+/// writer profile otherwise: 20 ms deadline, best effort). optical_power_w carries the strength.
+int RunRawOwner(int strength, double rate_hz) {
+  bus::BusParticipant participant({g_domain, "dpc-bench-owner"});
+  fdds::TypeSupport type(new msg::StokesSamplePubSubType());
+  type.register_type(participant.raw());
+  fdds::Topic* topic = participant.raw()->create_topic("dpc_bench_owned", type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+  fdds::Publisher* publisher = participant.raw()->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  fdds::DataWriterQos qos;
+  publisher->get_datawriter_qos_from_profile("dpc_stokes_sample.writer", qos);
+  qos.ownership().kind = fdds::EXCLUSIVE_OWNERSHIP_QOS;
+  qos.ownership_strength().value = static_cast<uint32_t>(strength);
+  fdds::DataWriter* writer = publisher->create_datawriter(topic, qos);
+  if (writer == nullptr) return 1;
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
+  msg::StokesSample sample;
+  sample.bench_id("owned");
+  sample.s_in({1, 0, 0});
+  sample.s_out({1, 0, 0});
+  sample.optical_power_known(true);
+  sample.optical_power_w(strength);
+  const int64_t period_ns = static_cast<int64_t>(1e9 / rate_hz);
+  int64_t next_ns = bus::MonotonicNs();
+  const timespec poll{0, 0};
+  for (uint64_t k = 1;; ++k) {
+    next_ns += period_ns;
+    const timespec ts{static_cast<time_t>(next_ns / 1000000000), static_cast<long>(next_ns % 1000000000)};
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    }
+    sample.sequence_number(k);
+    sample.publish_time_ns(bus::WallClockNs());
+    writer->write(&sample);
+    if ((k & 63) == 0 && sigtimedwait(&set, nullptr, &poll) > 0) break;
+  }
+  publisher->delete_datawriter(writer);
+  return 0;
+}
+
+class OwnedReader : public fdds::DataReaderListener {
+ public:
+  void on_data_available(fdds::DataReader* reader) override {
+    msg::StokesSample sample;
+    fdds::SampleInfo info;
+    while (reader->take_next_sample(&sample, &info) == ReturnCode_t::RETCODE_OK) {
+      if (!info.valid_data) continue;
+      std::lock_guard<std::mutex> lock(mutex);
+      arrivals.emplace_back(bus::WallClockNs(), static_cast<int>(sample.optical_power_w()));
+    }
+  }
+  std::mutex mutex;
+  std::vector<std::pair<int64_t, int>> arrivals;  ///< (wall ns, writer strength)
+  size_t CountFrom(int strength) {
+    std::lock_guard<std::mutex> lock(mutex);
+    size_t n = 0;
+    for (const auto& a : arrivals) n += a.second == strength;
+    return n;
+  }
+};
+
+/// kill -9 of the stronger of two EXCLUSIVE writers at 10 kHz: the gap at the reader between the
+/// last sample of the strong writer and the first of the weak one.
+std::vector<double> RawFailover(const std::string& self, int repetitions) {
+  std::vector<double> gaps_ms;
+  for (int r = 0; r < repetitions; ++r) {
+    bus::BusParticipant participant({g_domain, "dpc-bench-owned-reader"});
+    fdds::TypeSupport type(new msg::StokesSamplePubSubType());
+    type.register_type(participant.raw());
+    fdds::Topic* topic = participant.raw()->create_topic("dpc_bench_owned", type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+    fdds::Subscriber* subscriber = participant.raw()->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+    fdds::DataReaderQos qos;
+    subscriber->get_datareader_qos_from_profile("dpc_stokes_sample.reader", qos);
+    qos.ownership().kind = fdds::EXCLUSIVE_OWNERSHIP_QOS;
+    OwnedReader listener;
+    fdds::DataReader* reader = subscriber->create_datareader(topic, qos, &listener);
+    {
+      ChildProcess strong({self, "--raw-owner", "10", "--domain", std::to_string(g_domain)}, g_dir + "/owner_strong.log");
+      ChildProcess weak({self, "--raw-owner", "1", "--domain", std::to_string(g_domain)}, g_dir + "/owner_weak.log");
+      if (WaitUntil([&] { return listener.CountFrom(10) > 5000; }, 30s)) {
+        strong.Signal(SIGKILL);
+        WaitUntil([&] { return listener.CountFrom(1) > 1000; }, 10s);
+        std::lock_guard<std::mutex> lock(listener.mutex);
+        int64_t last_strong = 0, first_weak = 0;
+        for (const auto& [t, s] : listener.arrivals) {
+          if (s == 10) last_strong = t;
+        }
+        for (const auto& [t, s] : listener.arrivals) {
+          if (s == 1 && t > last_strong) {
+            first_weak = t;
+            break;
+          }
+        }
+        if (first_weak > 0) gaps_ms.push_back(static_cast<double>(first_weak - last_strong) * 1e-6);
+      }
+    }
+    reader->set_listener(nullptr);
+    subscriber->delete_datareader(reader);
+  }
+  return gaps_ms;
+}
+
+void Failover(int repetitions, const std::string& self) {
   fmt::print("failover after kill -9 of the obeyed controller (10 kHz; must ≤ 10 ms, aim ≤ 2 ms)\n");
   std::vector<double> gaps_ms;
   for (int r = 0; r < repetitions; ++r) {
@@ -310,10 +480,14 @@ void Failover(int repetitions) {
   for (double g : gaps_ms) list += fmt::format(" {:.2f}", g);
   fmt::print("  gaps (ms):{}\n", list);
   if (!gaps_ms.empty()) {
-    fmt::print("  median {:.2f} ms, worst {:.2f} ms; DDS reference: EXCLUSIVE ownership with a 10 ms "
-               "deadline switched after ~9.5 ms (../shared/FASTDDS-NOTES.md)\n",
-               gaps_ms[gaps_ms.size() / 2], gaps_ms.back());
+    fmt::print("  median {:.2f} ms, worst {:.2f} ms\n", gaps_ms[gaps_ms.size() / 2], gaps_ms.back());
   }
+  std::vector<double> raw = RawFailover(self, std::max(3, repetitions / 2));
+  std::sort(raw.begin(), raw.end());
+  list.clear();
+  for (double g : raw) list += fmt::format(" {:.2f}", g);
+  fmt::print("  raw DDS reference, EXCLUSIVE ownership (20 ms deadline, 10 kHz), gaps (ms):{}\n", list);
+  if (!raw.empty()) fmt::print("  raw median {:.2f} ms, worst {:.2f} ms\n", raw[raw.size() / 2], raw.back());
 }
 
 void Tracking(double seconds) {
@@ -375,10 +549,13 @@ int main(int argc, char** argv) {
   std::string only;
   app.add_flag("--quick", quick, "Short runs (~3 min) instead of the full ones (~20 min)");
   app.add_flag("--pong", pong, "(internal) the echo side of the raw ping-pong");
+  int raw_owner = 0;
+  app.add_option("--raw-owner", raw_owner, "(internal) a raw EXCLUSIVE writer of this strength");
   app.add_option("--domain", dpc::g_domain, "DDS domain (loopback profile)")->check(CLI::Range(0, 232));
   app.add_option("--only", only, "One section: raw,loop,rate,failover,tracking,memory");
   CLI11_PARSE(app, argc, argv);
   if (pong) return dpc::RunPong();
+  if (raw_owner > 0) return dpc::RunRawOwner(raw_owner, 10000.0);
   dpc::g_dir = std::filesystem::temp_directory_path().string() + "/dpc_bus_benchmark_" + std::to_string(getpid());
   std::filesystem::create_directories(dpc::g_dir);
   fmt::print("dpc_bus_benchmark: domain {}, logs in {}{}\n", dpc::g_domain, dpc::g_dir, quick ? " (quick)" : "");
@@ -399,7 +576,7 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
   }
   if (want("failover")) {
-    dpc::Failover(quick ? 3 : 10);
+    dpc::Failover(quick ? 3 : 10, self);
     std::fflush(stdout);
   }
   if (want("tracking")) {
@@ -407,7 +584,7 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
   }
   if (want("rate")) {
-    dpc::Rates(quick ? 10.0 : 60.0);
+    dpc::Rates(quick ? 10.0 : 60.0, self);
     std::fflush(stdout);
   }
   if (want("memory")) dpc::Memory(quick ? 60.0 : 600.0);
