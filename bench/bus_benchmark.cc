@@ -45,12 +45,14 @@
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/wall_clock.h"
 #include "support/child_process.h"
+#include "support/json_lines.h"
 
 namespace dpc {
 namespace {
 
 using testing::ChildProcess;
 using testing::WaitUntil;
+using testing::LastJsonLine;
 using namespace std::chrono_literals;
 
 struct Percentiles {
@@ -100,14 +102,6 @@ class Services {
   std::vector<std::unique_ptr<ChildProcess>> processes_;
 };
 
-nlohmann::json LastJsonLine(const std::string& log) {
-  std::istringstream in(log);
-  std::string line, last;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line[0] == '{') last = line;
-  }
-  return last.empty() ? nlohmann::json() : nlohmann::json::parse(last, nullptr, false);
-}
 
 // ---- raw ping-pong -------------------------------------------------------------------------
 

@@ -16,12 +16,14 @@
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/wall_clock.h"
 #include "support/child_process.h"
+#include "support/json_lines.h"
 
 namespace dpc {
 namespace {
 
 using dpc::testing::ChildProcess;
 using dpc::testing::WaitUntil;
+using dpc::testing::LastJsonLine;
 using namespace std::chrono_literals;
 
 std::string TempDir() {
@@ -151,14 +153,6 @@ double MaxAbsDifference(const std::vector<double>& a, const std::vector<double>&
   return m;
 }
 
-nlohmann::json LastJsonLine(const std::string& log) {
-  std::istringstream in(log);
-  std::string line, last;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line[0] == '{') last = line;
-  }
-  return last.empty() ? nlohmann::json() : nlohmann::json::parse(last);
-}
 
 TEST_F(BenchProcessTest, ThreeServicesLockOnLoopback) {
   StartObserver(40);
