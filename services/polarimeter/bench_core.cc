@@ -168,6 +168,7 @@ BenchReport BenchCore::RunRealTime(BenchLink* link, SimulationObserver* observer
   double statistics_origin_s = 0.0;
   ChainPose pose;
   ControlVector phi = initial_phi_;
+  ControlVector incoming = initial_phi_;  // the latest state's φ, copied in without allocating
   chain.ComputePose(phi, &pose);
 
   BenchReport report;
@@ -194,8 +195,8 @@ BenchReport BenchCore::RunRealTime(BenchLink* link, SimulationObserver* observer
                                                    std::nullopt, settings_.settle_s);
       statistics_origin_s = static_cast<double>(k) * dt_s;
     }
-    if (auto applied = link->LatestApplied(); applied && *applied != phi) {
-      phi = *applied;
+    if (link->TakeApplied(&incoming) && incoming != phi) {
+      phi = incoming;
       chain.ComputePose(phi, &pose);
     }
     const double t_s = static_cast<double>(k) * dt_s;

@@ -40,8 +40,9 @@ class BenchLink {
   /// the sample if no answer comes, e.g. before a controller matched). nullopt: stop (signal or
   /// timeout; `why` says which).
   virtual std::optional<ControlVector> AwaitAnswer(const msg::StokesSample& sample, std::string* why) = 0;
-  /// Real time: the latest applied φ (nullopt until a valid state arrived).
-  virtual std::optional<ControlVector> LatestApplied() = 0;
+  /// Real time: if a valid state arrived since the last call, copies its applied φ into `*phi`
+  /// (sized for the device, so nothing is allocated) and returns true.
+  virtual bool TakeApplied(ControlVector* phi) = 0;
   /// Real time: the latest accepted target, if it changed since the last call.
   virtual std::optional<TargetConfig> TargetChange() = 0;
   virtual bool stop_requested() = 0;

@@ -27,7 +27,10 @@ class DdsBenchLink final : public BenchLink {
  public:
   DdsBenchLink(bus::BusParticipant* participant, const BenchCore* bench, const std::string& bench_id,
                ShutdownSignals* signals, double lockstep_timeout_s)
-      : bench_(bench), signals_(signals), lockstep_timeout_s_(lockstep_timeout_s) {
+      : bench_(bench),
+        signals_(signals),
+        lockstep_timeout_s_(lockstep_timeout_s),
+        latest_(ControlVector::Zero(bench->control_count())) {
     writer_ = participant->MakeWriter<msg::StokesSample>();
     states_ = participant->MakeReader<msg::WaveplateState>(
         bench_id, [this](const msg::WaveplateState& state, const auto&) { OnState(state); });
@@ -72,9 +75,12 @@ class DdsBenchLink final : public BenchLink {
     return phi;
   }
 
-  std::optional<ControlVector> LatestApplied() override {
+  bool TakeApplied(ControlVector* phi) override {
     std::lock_guard<std::mutex> lock(mutex_);
-    return latest_;
+    if (!latest_fresh_) return false;
+    *phi = latest_;
+    latest_fresh_ = false;
+    return true;
   }
   std::optional<TargetConfig> TargetChange() override {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -100,12 +106,12 @@ class DdsBenchLink final : public BenchLink {
       rejections_.Update(++rejected_states_, reason);
       return;
     }
-    ControlVector phi(static_cast<int>(state.phi_applied().size()));
-    for (size_t i = 0; i < state.phi_applied().size(); ++i) phi[static_cast<int>(i)] = state.phi_applied()[i];
     std::lock_guard<std::mutex> lock(mutex_);
-    latest_ = phi;
+    // CheckApplied guarantees one value per control: latest_ keeps its size, nothing allocates.
+    for (size_t i = 0; i < state.phi_applied().size(); ++i) latest_[static_cast<int>(i)] = state.phi_applied()[i];
+    latest_fresh_ = true;
     if (awaited_ != 0 && state.answers_sample() == awaited_) {
-      answer_ = std::move(phi);
+      answer_ = latest_;
       awaited_ = 0;
       answered_.notify_one();
     }
@@ -133,7 +139,8 @@ class DdsBenchLink final : public BenchLink {
   std::condition_variable answered_;
   uint64_t awaited_ = 0;
   std::optional<ControlVector> answer_;
-  std::optional<ControlVector> latest_;
+  ControlVector latest_;        ///< the latest valid state's φ (one value per control)
+  bool latest_fresh_ = false;   ///< latest_ arrived since the last TakeApplied
   std::optional<TargetConfig> target_change_;
   uint64_t target_revision_ = 1;  // revision 1 is the scenario's target, the bench's own
   uint64_t rejected_states_ = 0;
