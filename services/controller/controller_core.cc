@@ -129,23 +129,23 @@ void ControllerCore::RejectSample(std::string reason) {
   last_rejection_ = std::move(reason);
 }
 
-std::optional<msg::WaveplateCommand> ControllerCore::OnSample(const msg::StokesSample& sample,
+const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& sample,
                                                               int64_t now_ns, int64_t wall_ns) {
   if (std::string reason = bus::CheckStokesSample(sample); !reason.empty()) {
     RejectSample(reason);
-    return std::nullopt;
+    return nullptr;
   }
-  if (!configured()) return std::nullopt;
+  if (!configured()) return nullptr;
   if (sample.sequence_number() == last_sample_ && last_command_ &&
       last_command_->answers_sample() == last_sample_) {
     // The same sample again: a lockstep bench re-publishes when its answer was lost (the
     // periodic topics are best effort). Answer it again, without integrating twice.
     last_command_->publish_time_ns(wall_ns);
-    return last_command_;
+    return &*last_command_;
   }
   if (sample.sequence_number() <= last_sample_) {
     // Out of order or repeated (a restarted bench starts again at 1: accept after a gap).
-    if (now_ns - last_sample_ns_ < static_cast<int64_t>(settings_.freeze_after_s * 1e9)) return std::nullopt;
+    if (now_ns - last_sample_ns_ < static_cast<int64_t>(settings_.freeze_after_s * 1e9)) return nullptr;
   }
   if (last_sample_ns_ != 0 &&
       now_ns - last_sample_ns_ > static_cast<int64_t>(settings_.freeze_after_s * 1e9)) {
@@ -186,7 +186,10 @@ std::optional<msg::WaveplateCommand> ControllerCore::OnSample(const msg::StokesS
     last_rejection_ = fmt::format("update failed: {}", ControlStatusName(status));
   }
 
-  msg::WaveplateCommand command;
+  // Built in place: after the first command the message's φ keeps its capacity, so answering
+  // a sample allocates nothing.
+  if (!last_command_) last_command_.emplace();
+  msg::WaveplateCommand& command = *last_command_;
   command.bench_id(settings_.bench_id);
   command.controller_id(settings_.controller_id);
   command.priority(settings_.priority);
@@ -198,8 +201,7 @@ std::optional<msg::WaveplateCommand> ControllerCore::OnSample(const msg::StokesS
   command.phi().assign(phi.data(), phi.data() + phi.size());
   command.publish_time_ns(wall_ns);
   last_answered_sample_ = sample.sequence_number();
-  last_command_ = command;
-  return command;
+  return &command;
 }
 
 msg::ControllerStatus ControllerCore::TakeStatus(int64_t now_ns, int64_t wall_ns,

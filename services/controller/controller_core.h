@@ -54,9 +54,10 @@ class ControllerCore {
   std::string OnTarget(const msg::Target& target);
   void OnState(const msg::WaveplateState& state);
   /// A polarimeter sample at wall time `wall_ns`, monotonic `now_ns`: the command answering it,
-  /// or nullopt (not configured, malformed, stale sample). A failed update answers with φ unchanged.
-  std::optional<msg::WaveplateCommand> OnSample(const msg::StokesSample& sample, int64_t now_ns,
-                                                int64_t wall_ns);
+  /// or none (not configured, malformed, stale sample). A failed update answers with φ unchanged.
+  /// The command is the core's own (valid until the next OnSample call), or nullptr.
+  const msg::WaveplateCommand* OnSample(const msg::StokesSample& sample, int64_t now_ns,
+                                        int64_t wall_ns);
 
   /// The status since the previous call (resets the per-interval figures).
   msg::ControllerStatus TakeStatus(int64_t now_ns, int64_t wall_ns, uint64_t missed_deadlines);
