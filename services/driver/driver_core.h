@@ -62,8 +62,11 @@ class DriverCore {
   /// period), instead of waking every period while commands flow.
   int64_t NextTickNs() const;
 
-  /// The current state (e.g. the first one, published at start-up).
+  /// The current state, without numbering it (inspection).
   msg::WaveplateState State(int64_t wall_ns) const;
+  /// The current state as the next one to publish (e.g. the first, at start-up): its
+  /// sequence_number is one more than the previous published state's, starting at 1.
+  msg::WaveplateState Publishable(int64_t wall_ns);
 
   const std::string& obeyed() const { return obeyed_; }
   bool holding() const { return obeyed_.empty(); }
@@ -85,7 +88,6 @@ class DriverCore {
   void Obey(const std::string& id, const std::string& reason);
   void Hold(const std::string& reason);
   void Reject(const std::string& controller_id, const std::string& reason);
-  msg::WaveplateState Publishable(int64_t wall_ns);
 
   WaveplateChain chain_;
   DriverSettings settings_;

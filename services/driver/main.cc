@@ -100,7 +100,7 @@ int Run(int argc, char** argv) {
     };
     {
       std::lock_guard<std::mutex> lock(mutex);
-      publish(core.State(bus::WallClockNs()));
+      publish(core.Publishable(bus::WallClockNs()));
     }
     RejectionLog rejections("rejected command");
     auto commands = participant.MakeReader<msg::WaveplateCommand>(

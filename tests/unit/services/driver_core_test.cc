@@ -36,6 +36,10 @@ TEST_F(DriverCoreTest, StartsHoldingWithTheBackendsPhi) {
   EXPECT_EQ(state.mode(), msg::DRIVER_HOLDING);
   EXPECT_EQ(state.phi_applied(), std::vector<double>({0.0, 0.0, 0.0}));
   EXPECT_NE(state.reason().to_string().find("no controller"), std::string::npos);
+  // Published states are numbered from 1; State() only looks.
+  EXPECT_EQ(state.sequence_number(), 0u);
+  EXPECT_EQ(core_.Publishable(0).sequence_number(), 1u);
+  EXPECT_EQ(core_.Publishable(0).sequence_number(), 2u);
 }
 
 TEST_F(DriverCoreTest, AppliesTheFirstControllersCommandAndAnswersItsSample) {
