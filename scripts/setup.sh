@@ -15,7 +15,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   gnuplot-nox time
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
-  cyclonedds-dev cyclonedds-tools iproute2 procps
+  cyclonedds-dev cyclonedds-tools iproute2 procps python3
 )
 
 missing=()
