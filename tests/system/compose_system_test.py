@@ -267,6 +267,25 @@ class Bench:
         return items[-1][1] if items else None
 
 
+def cyclone_reads(probe, prefix, work):
+    """Another vendor's subscriber on the host (Cyclone DDS, deploy/cyclonedds/compose-host.xml)."""
+    with open(os.path.join(REPO, "deploy", "cyclonedds", "compose-host.xml")) as f:
+        config = f.read().replace("10.99.10.", prefix + ".")
+    path = os.path.join(work, "cyclone-host.xml")
+    with open(path, "w") as f:
+        f.write(config)
+    result = run([probe, "--domain", DOMAIN, "--bench-id", BENCH_ID, "--timeout-s", "15", "--states", "3"],
+                 check=False, env=dict(os.environ, CYCLONEDDS_URI=f"file://{path}"), timeout=60)
+    topics = set()
+    for line in result.stdout.splitlines():
+        try:
+            topics.add(json.loads(line).get("topic"))
+        except ValueError:
+            pass
+    expect(result.returncode == 0 and "dpc_waveplate_state" in topics,
+           f"a Cyclone DDS subscriber on the host reads the bench (topics {sorted(t for t in topics if t)})")
+
+
 def max_abs_difference(a, b):
     return max(abs(x - y) for x, y in zip(a, b))
 
@@ -301,6 +320,13 @@ def failover_and_hold(args, base, work):
         state = bench.latest_state()
         expect(state["mode"] == "DRIVER_ACTIVE" and state["obeyed_controller_id"] == "main",
                f"the driver obeys the main controller ({state['reason']})")
+        network = f"{project.name}_bench"
+        info = json.loads(run(["docker", "network", "inspect", network]).stdout)[0]
+        subnets = [c["Subnet"] for c in info["IPAM"]["Config"]]
+        expect(info["Internal"] and subnets == [f"{PREFIX}.0/24"],
+               f"the network {network} is internal, subnet {subnets} (no route out of the machine)")
+        if args.cyclone_probe:
+            cyclone_reads(args.cyclone_probe, PREFIX, work)
 
         # --- kill of the controller container → the standby takes over ---------------------------
         time.sleep(1.0)
@@ -334,7 +360,6 @@ def failover_and_hold(args, base, work):
         expect(bench.locked_since(time.monotonic() - 1.0, window_s=0.5) is not None, "locked under the standby")
 
         # --- network disconnect of the solver → hold; reconnect → resume without a jump --------------
-        network = f"{project.name}_bench"
         standby = project.container("controller-standby")
         log(f"docker network disconnect {network} (the standby controller) for {args.disconnect_s} s")
         disconnected = time.monotonic()
@@ -439,6 +464,7 @@ def main():
     parser.add_argument("--scrambler-rad-per-s", type=float, default=0.2,
                         help="the input's rotation rate (slow, so that a jump at resume stands out)")
     parser.add_argument("--disconnect-s", type=float, default=1.5, help="how long the solver is cut off")
+    parser.add_argument("--cyclone-probe", help="dpc-cyclone-probe: also read the bench with Cyclone DDS")
     parser.add_argument("--skip-split", action="store_true")
     args = parser.parse_args()
     if not os.access(args.dpc, os.X_OK):
