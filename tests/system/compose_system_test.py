@@ -286,6 +286,15 @@ def cyclone_reads(probe, prefix, work):
            f"a Cyclone DDS subscriber on the host reads the bench (topics {sorted(t for t in topics if t)})")
 
 
+def loop_latencies_us(bench, since):
+    """Sorted latencies from a sample's publication (polarimeter) to the driver's receipt of the
+    command that answers it, for the states seen since `since` (one host clock for all containers)."""
+    published = {m["sequence_number"]: m["publish_time_ns"] for _, m in bench.samples.snapshot(since - 1.0)}
+    return sorted((m["command_receive_time_ns"] - published[m["answers_sample"]]) * 1e-3
+                  for _, m in bench.states.snapshot(since)
+                  if m["mode"] == "DRIVER_ACTIVE" and m["answers_sample"] in published)
+
+
 def max_abs_difference(a, b):
     return max(abs(x - y) for x, y in zip(a, b))
 
@@ -332,6 +341,12 @@ def failover_and_hold(args, base, work):
         time.sleep(1.0)
         before_kill = time.monotonic()
         figures["host_sample_rate_hz"] = len(bench.samples.snapshot(before_kill - 1.0)) / 1.0
+        latencies = loop_latencies_us(bench, before_kill - 1.0)
+        if latencies:
+            figures["loop_latency_p50_us"] = latencies[len(latencies) // 2]
+            figures["loop_latency_p99_us"] = latencies[int(len(latencies) * 0.99)]
+            log(f"loop latency (sample published → command received by the driver): p50 "
+                f"{figures['loop_latency_p50_us']:.0f} µs, p99 {figures['loop_latency_p99_us']:.0f} µs")
         log(f"samples seen on the host: {figures['host_sample_rate_hz']:.0f} per second (polarimeter at {args.rate_hz} Hz)")
         errors_before = [e for _, e in bench.errors(before_kill - 1.0, before_kill)]
         log("docker kill of the controller container")

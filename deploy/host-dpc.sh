@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# Runs a `dpc` DDS tool on the host against the compose bench, through the network's gateway:
+# waits until the bench's bridge is up (Fast DDS drops a whitelisted address whose interface is
+# down, and the bridge comes up only when the first container attaches), writes the host profile
+# (deploy/host-profile.sh) and runs the tool with it.
+#
+#   deploy/host-dpc.sh                           # dpc monitor
+#   deploy/host-dpc.sh topic echo state --json   # any dpc command
+#   DPC_NET_PREFIX=10.99.12 deploy/host-dpc.sh … # another compose network
+#   DPC_HOST_PROFILE_ARGS=--server deploy/host-dpc.sh …   # with deploy/compose/discovery-server.yml
+# DPC_BINARY overrides the tool (default: build/tools/dpc/dpc); DPC_WAIT_S how long to wait (60).
+set -euo pipefail
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+prefix="${DPC_NET_PREFIX:-10.99.10}"
+dpc="${DPC_BINARY:-$here/../build/tools/dpc/dpc}"
+[[ -x "$dpc" ]] || { echo "host-dpc.sh: $dpc not built (scripts/setup.sh builds it)" >&2; exit 2; }
+[[ $# -gt 0 ]] || set -- monitor
+
+deadline=$((SECONDS + ${DPC_WAIT_S:-60}))
+announced=0
+until ip -o -4 addr show up 2>/dev/null | grep -q " inet $prefix\.1/" &&
+      ip -o link show "$(ip -o -4 addr | awk -v a="$prefix.1/" 'index($4, a) == 1 {print $2}')" 2>/dev/null |
+        grep -q 'state UP'; do
+  if ((SECONDS >= deadline)); then
+    echo "host-dpc.sh: no bench network with gateway $prefix.1 is up (is \`docker compose up\` running?)" >&2
+    exit 3
+  fi
+  ((announced)) || { echo "host-dpc.sh: waiting for the bench's network ($prefix.0/24) …" >&2; announced=1; }
+  sleep 0.2
+done
+
+profile=$(mktemp /tmp/dpc-host-profile.XXXXXX.xml)
+trap 'rm -f "$profile"' EXIT
+# shellcheck disable=SC2086
+"$here/host-profile.sh" --prefix "$prefix" ${DPC_HOST_PROFILE_ARGS:-} >"$profile"
+FASTRTPS_DEFAULT_PROFILES_FILE="$profile" "$dpc" "$@" &
+child=$!
+trap 'kill -TERM $child 2>/dev/null || true' INT TERM
+wait $child || status=$?
+wait $child 2>/dev/null || true
+exit "${status:-0}"
