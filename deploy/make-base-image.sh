@@ -83,6 +83,7 @@ echo 'APT::Install-Recommends "false";' >"$root/etc/apt/apt.conf.d/docker-no-rec
 rm -rf "$root"/var/lib/apt/lists/* "$root"/var/cache/apt/*.bin "$root"/var/cache/apt/archives/*.deb \
        "$root"/usr/share/info/* "$root"/var/log/*.log "$root"/tmp/*
 find "$root/usr/share/man" -not -type d -delete 2>/dev/null || true  # (keep the dirs: openjdk needs man1)
+find "$root/usr/share/locale" -mindepth 1 -maxdepth 1 -not -name locale.alias -exec rm -rf {} + 2>/dev/null || true
 find "$root/usr/share/doc" -mindepth 2 -not -name copyright -not -type d -delete 2>/dev/null || true
 
 echo "make-base-image: importing as $tag"
