@@ -38,6 +38,8 @@ void ScenarioOverrides::AddTo(CLI::App& app) {
                  "polarization)")
       ->delimiter(',')
       ->expected(3, 4);
+  app.add_flag("--target-linear", target_linear,
+               "1-D target s3 = 0: any linear polarization (the same as --target-set 0,0,1)");
   app.add_option("--loop", loop, "Loop mode: model (S_out from the model) or measured");
   app.add_option("--activation-s", activation_s, "Control starts at this time (s)");
   app.add_option("--rate-rad-per-s", rate_rad_per_s,
@@ -156,8 +158,16 @@ void ScenarioOverrides::Apply(ScenarioConfig* s) const {
       field_to_flag_["controller.nullspace_criterion"] = "--range";
     }
   }
-  if (!target_point.empty() && !target_set.empty()) {
-    throw ScenarioError("--target-point", "contradicts --target-set: one target");
+  if (static_cast<int>(!target_point.empty()) + static_cast<int>(!target_set.empty()) +
+          static_cast<int>(target_linear) > 1) {
+    throw ScenarioError(!target_point.empty() ? "--target-point" : "--target-set",
+                        "give one of --target-point, --target-set, --target-linear");
+  }
+  if (target_linear) {
+    s->target.kind = TargetConfig::Kind::kSet;
+    s->target.normal = Vector3::UnitZ();
+    s->target.offset = 0.0;
+    field_to_flag_["target.set"] = "--target-linear";
   }
   if (!target_point.empty()) {
     s->target.kind = TargetConfig::Kind::kPoint;

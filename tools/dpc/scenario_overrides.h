@@ -15,6 +15,7 @@
 //                           (controller.nullspace_criterion RANGE, saturate and re-solve)
 //   --target-point s1,s2,s3 target.point
 //   --target-set n1,n2,n3[,c]   target.set: n·S = c (c = 0 if omitted), e.g. 0,0,1 for s3 = 0
+//   --target-linear         target.set s3 = 0: any linear polarization (as `dpc target --linear`)
 //   --loop model|measured   controller.loop
 //   --activation-s          controller.activation_s
 //   --rate-rad-per-s        rate of every paper_scrambler and constant_rotation disturbance;
@@ -42,7 +43,7 @@ struct ScenarioOverrides {
   std::optional<std::string> method;
   std::optional<double> step, nullspace_step, threshold, damping, activation_s;
   std::optional<double> damping_threshold;
-  bool predict = false, no_predict = false, correct = false;
+  bool predict = false, no_predict = false, correct = false, target_linear = false;
   std::optional<double> predict_window;
   std::optional<double> range;
   std::vector<double> target_point, target_set;

@@ -110,7 +110,7 @@ struct DitherConfig {
 /// scenario.proto SingularityDamping: damped J⁺ near singularities (gp, gpt):
 /// λ² = max_damping²·(1 − (σ_min/threshold)²) below σ_min = threshold, 0 above.
 struct SingularityDampingConfig {
-  double max_damping = 0.5;  ///< λ0
+  double max_damping = 0.25;  ///< λ0
   double threshold = 0.5;    ///< ε
 };
 

@@ -26,37 +26,10 @@ void DelayCompensator::Reset() {
   have_previous_ = false;
 }
 
-const StokesVector& DelayCompensator::Predict(const StokesVector& s_in_measured,
-                                              double horizon_samples) {
-  predictor_.Observe(s_in_measured);
-  return Keep(predictor_.PredictSamples(horizon_samples));
-}
-
 const StokesVector& DelayCompensator::PredictAt(const StokesVector& s_in_measured, double t_s,
                                                 double horizon_s) {
   predictor_.ObserveAt(s_in_measured, t_s);
   return Keep(predictor_.PredictSeconds(horizon_s));
-}
-
-const StokesVector& DelayCompensator::Keep(const StokesVector& prediction) {
-  previous_ = have_previous_ ? current_ : prediction;
-  have_previous_ = true;
-  current_ = prediction;
-  return current_;
-}
-
-void DelayCompensator::AddLead(ControlProblem* problem) const {
-  if (lead_samples_ == 0.0) return;
-  const Vector3 motion = current_ - previous_;
-  if (problem->target->is_point()) {
-    // e = Eᵀ(MᵀS* − S_in): m = −Eᵀ·motion.
-    problem->task_error[0] -= lead_samples_ * problem->tangent_e1.dot(motion);
-    problem->task_error[1] -= lead_samples_ * problem->tangent_e2.dot(motion);
-  } else {
-    // e = c − n·(M S_in): m = −(Mᵀn)·motion.
-    const Vector3 normal_in = problem->kinematics.mueller.transpose() * problem->target->normal();
-    problem->task_error[0] -= lead_samples_ * normal_in.dot(motion);
-  }
 }
 
 }  // namespace dpc

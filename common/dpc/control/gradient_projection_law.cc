@@ -33,6 +33,8 @@ GradientProjectionLaw::GradientProjectionLaw(double step, double nullspace_step,
       damping_threshold_(options.damping_threshold),
       range_aware_(options.range_aware),
       curvature_correction_(options.curvature_correction),
+      has_options_(options.max_damping != 0.0 || options.range_aware ||
+                   options.curvature_correction),
       pseudo_inverse_(options.singular_value_tolerance) {
   if (!std::isfinite(step) || !(step > 0.0)) {
     throw std::invalid_argument(fmt::format("gradient projection step must be > 0 (got {})", step));
@@ -53,6 +55,14 @@ GradientProjectionLaw::GradientProjectionLaw(double step, double nullspace_step,
     throw std::invalid_argument(fmt::format(
         "gradient projection damping threshold must be > 0 (got {})", damping_threshold_));
   }
+}
+
+inline bool GradientProjectionLaw::NullspaceActive(const ControlVector& phi) const {
+  if (!(nullspace_step_ > 0.0)) return false;
+  if (!threshold_) return true;
+  double largest = 0.0;
+  for (int i = 0; i < phi.size(); ++i) largest = std::max(largest, std::abs(phi[i]));
+  return largest > *threshold_;
 }
 
 void GradientProjectionLaw::Factorize(const TaskJacobian& task) {
@@ -85,32 +95,39 @@ void GradientProjectionLaw::RangeGradient(const ControlProblem& problem) {
 
 ControlStatus GradientProjectionLaw::ComputeUpdate(const ControlProblem& problem,
                                                    ControlVector* delta_phi) {
+  if (has_options_) return ComputeUpdateWithOptions(problem, delta_phi);
+  // The paper's law.
+  pseudo_inverse_.Compute(problem.task_jacobian);
+  diagnostics_.rank = pseudo_inverse_.rank();
+  diagnostics_.singular_values = pseudo_inverse_.singular_values();
+
   const ControlVector& phi = problem.phi();
   const int n = static_cast<int>(phi.size());
-  bool active = nullspace_step_ > 0.0;
-  if (active && threshold_) {
-    double largest = 0.0;
-    for (int i = 0; i < n; ++i) largest = std::max(largest, std::abs(phi[i]));
-    active = largest > *threshold_;
+  const bool active = NullspaceActive(phi);
+  diagnostics_.nullspace_active = active;
+  pseudo_inverse_.GradientProjectionStep(problem.task_error, phi, step_,
+                                         active ? nullspace_step_ : 0.0, delta_phi);
+  // 0·x is 0 for finite x and NaN for NaN or ±Inf: one branch for the whole vector.
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i) sum += 0.0 * (*delta_phi)[i];
+  if (sum != 0.0) {
+    delta_phi->setZero();
+    return ControlStatus::kNotFinite;
   }
+  const bool full_rank = pseudo_inverse_.rank() == problem.task_jacobian.rows();
+  return full_rank ? ControlStatus::kOk : ControlStatus::kRankDeficient;
+}
+
+ControlStatus GradientProjectionLaw::ComputeUpdateWithOptions(const ControlProblem& problem,
+                                                              ControlVector* delta_phi) {
+  const ControlVector& phi = problem.phi();
+  const bool active = NullspaceActive(phi);
   diagnostics_.nullspace_active = active;
   const double nullspace_step = active ? nullspace_step_ : 0.0;
-
-  if (max_damping_ == 0.0 && !range_aware_ && !curvature_correction_) {  // the paper's law
-    pseudo_inverse_.Compute(problem.task_jacobian);
-    pseudo_inverse_.GradientProjectionStep(problem.task_error, phi, step_, nullspace_step,
-                                           delta_phi);
-  } else {
-    Factorize(problem.task_jacobian);
-    if (range_aware_) {
-      RangeGradient(problem);
-      pseudo_inverse_.GradientProjectionStep(problem.task_error, gradient_, step_, nullspace_step,
-                                             delta_phi);
-    } else {
-      pseudo_inverse_.GradientProjectionStep(problem.task_error, phi, step_, nullspace_step,
-                                             delta_phi);
-    }
-  }
+  Factorize(problem.task_jacobian);
+  if (range_aware_) RangeGradient(problem);
+  pseudo_inverse_.GradientProjectionStep(problem.task_error, range_aware_ ? gradient_ : phi,
+                                         step_, nullspace_step, delta_phi);
   diagnostics_.rank = pseudo_inverse_.rank();
   diagnostics_.singular_values = pseudo_inverse_.singular_values();
   const bool full_rank = pseudo_inverse_.rank() == problem.task_jacobian.rows();
@@ -151,6 +168,10 @@ void GradientProjectionLaw::CorrectCurvature(const ControlProblem& problem,
     const double decrease =
         target.normal().dot(chain.Output(next_pose_, problem.s_in) - k.s_out);
     residual_[0] = task.row(0).dot(delta_phi->head(n)) - decrease;
+  }
+  // Always damped: near a singularity an undamped correction would be as large as 1/σ_min.
+  if (max_damping_ == 0.0) {
+    pseudo_inverse_.ComputeDamped(task, kDefaultMaxDamping, kDefaultDampingThreshold);
   }
   pseudo_inverse_.Solve(residual_, &correction_);
   *delta_phi += correction_;

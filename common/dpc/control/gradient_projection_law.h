@@ -34,8 +34,9 @@
 //   Curvature correction (curvature_correction): the step Δφ is computed from the linear model;
 //   along a fast reconfiguration (near a singularity, or a large null-space step) the chain's
 //   curvature leaves a residual r = TΔφ − (e(φ) − e(φ + Δφ)), the decrease of the task error the
-//   linear model promised minus the one the model gives. One correction step Δφ += J⁺r (the same
-//   damped factorization; one extra pose and chain pass) removes it to second order. With
+//   linear model promised minus the one the model gives. One correction step Δφ += J_λ⁺r (always
+//   damped: with λ0, ε, or the defaults when damping is off; one extra pose and chain pass)
+//   removes it to second order. With
 //   delay compensation (delay_compensator.h) whatever residual is left is corrected only at the
 //   integrator's rate μ, so this is what lets a deterministic rotation be tracked exactly.
 //
@@ -63,8 +64,8 @@ class GradientProjectionLaw final : public ControlLaw {
  public:
   /// Clip of the range criterion's gradient x + x⁷ (reached at |x| ≈ 1.17, outside the range).
   static constexpr double kMaxRangeGradient = 4.0;
-  /// The re-solve's damping when damping is off.
-  static constexpr double kDefaultMaxDamping = 0.5;
+  /// The re-solve's and the correction's damping when damping is off.
+  static constexpr double kDefaultMaxDamping = 0.25;
   static constexpr double kDefaultDampingThreshold = 0.5;
 
   /// step μ > 0, nullspace_step μ_N ≥ 0, both finite; threshold (if set) finite and ≥ 0.
@@ -87,6 +88,10 @@ class GradientProjectionLaw final : public ControlLaw {
   int saturated_controls() const { return saturated_count_; }
 
  private:
+  /// The update with any of the options (ComputeUpdate runs the paper's law without them).
+  ControlStatus ComputeUpdateWithOptions(const ControlProblem& problem, ControlVector* delta_phi);
+  /// Whether the null-space term runs at φ (μ_N > 0; gpt: some |φ_i| > threshold).
+  bool NullspaceActive(const ControlVector& phi) const;
   void Factorize(const TaskJacobian& task);
   /// ∇H at φ into gradient_ (range criterion).
   void RangeGradient(const ControlProblem& problem);
@@ -103,6 +108,7 @@ class GradientProjectionLaw final : public ControlLaw {
   double damping_threshold_ = kDefaultDampingThreshold;
   bool range_aware_ = false;
   bool curvature_correction_ = false;
+  bool has_options_ = false;
   TaskPseudoInverse pseudo_inverse_;
   ChainPose next_pose_;
   ControlVector next_phi_, correction_;

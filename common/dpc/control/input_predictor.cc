@@ -15,8 +15,15 @@ constexpr double kRelativeRidge = 1e-9;
 
 }  // namespace
 
-InputPredictor::InputPredictor(double window_samples, double nominal_sample_period_s)
-    : window_samples_(window_samples), nominal_sample_period_s_(nominal_sample_period_s) {
+InputPredictor::InputPredictor(double window_samples, double nominal_sample_period_s,
+                               int refresh_samples)
+    : window_samples_(window_samples),
+      nominal_sample_period_s_(nominal_sample_period_s),
+      refresh_samples_(refresh_samples) {
+  if (refresh_samples < 1) {
+    throw std::invalid_argument(fmt::format(
+        "input predictor refresh interval must be >= 1 sample (got {})", refresh_samples));
+  }
   if (!std::isfinite(window_samples) || !(window_samples > 0.0)) {
     throw std::invalid_argument(
         fmt::format("input predictor window must be > 0 samples (got {})", window_samples));
@@ -35,48 +42,20 @@ void InputPredictor::Reset() {
   latest_ = StokesVector::UnitX();
   latest_t_s_ = 0.0;
   samples_ = 0;
-}
-
-bool InputPredictor::Observe(const StokesVector& s) {
-  const double norm = s.norm();
-  if (!std::isfinite(norm) || !(norm > 0.0)) return false;
-  const StokesVector unit = s / norm;
-  if (samples_ > 0) AddInterval(unit, 1.0);
-  latest_ = unit;
-  latest_t_s_ += nominal_sample_period_s_;
-  ++samples_;
-  return true;
+  cached_horizon_samples_ = -1.0;
+  since_refresh_ = 0;
 }
 
 bool InputPredictor::ObserveAt(const StokesVector& s, double t_s) {
-  const double norm = s.norm();
-  if (!std::isfinite(norm) || !(norm > 0.0) || !std::isfinite(t_s)) return false;
-  if (samples_ > 0 && !(t_s > latest_t_s_)) return false;
-  const StokesVector unit = s / norm;
+  if (!std::isfinite(t_s) || (samples_ > 0 && !(t_s > latest_t_s_))) return false;
+  StokesVector unit;
+  if (!NormalizeStokes(s, &unit)) return false;
   if (samples_ > 0) AddInterval(unit, (t_s - latest_t_s_) / nominal_sample_period_s_);
   latest_ = unit;
   latest_t_s_ = t_s;
   ++samples_;
+  ++since_refresh_;
   return true;
-}
-
-void InputPredictor::AddInterval(const StokesVector& s, double tau) {
-  const double f = tau == 1.0 ? uniform_forget_ : std::exp(-tau / window_samples_);
-  const double g = 1.0 - f;
-  const double half = 0.5 * tau;
-  const double ax = half * (s[0] + latest_[0]), ay = half * (s[1] + latest_[1]),
-               az = half * (s[2] + latest_[2]);
-  const double yx = s[0] - latest_[0], yy = s[1] - latest_[1], yz = s[2] - latest_[2];
-  const double a2 = ax * ax + ay * ay + az * az;
-  a_xx_ = f * a_xx_ + g * (a2 - ax * ax);
-  a_yy_ = f * a_yy_ + g * (a2 - ay * ay);
-  a_zz_ = f * a_zz_ + g * (a2 - az * az);
-  a_xy_ = f * a_xy_ - g * (ax * ay);
-  a_xz_ = f * a_xz_ - g * (ax * az);
-  a_yz_ = f * a_yz_ - g * (ay * az);
-  b_[0] = f * b_[0] + g * (ay * yz - az * yy);
-  b_[1] = f * b_[1] + g * (az * yx - ax * yz);
-  b_[2] = f * b_[2] + g * (ax * yy - ay * yx);
 }
 
 Vector3 InputPredictor::RotationPerSample() const {
@@ -98,15 +77,17 @@ Vector3 InputPredictor::RotationPerSample() const {
   return w * (2.0 * std::atan(0.5 * norm) / norm);
 }
 
-StokesVector InputPredictor::PredictSamples(double horizon_samples) const {
-  if (samples_ < 2 || !(horizon_samples > 0.0)) return latest_;
+void InputPredictor::Refresh(double horizon_samples) const {
+  cached_horizon_samples_ = horizon_samples;
+  since_refresh_ = 0;
+  cached_rotation_.setIdentity();
   const Vector3 rotation = RotationPerSample();
   const double rate = rotation.norm();
   const double angle = rate * horizon_samples;
-  if (!(angle > 0.0) || !std::isfinite(angle)) return latest_;
+  if (!(angle > 0.0) || !std::isfinite(angle)) return;
   double s, c;
   SinCos(angle, &s, &c);
-  return RotateVector(rotation / rate, c, s, latest_);
+  cached_rotation_ = RotationAboutAxis(rotation / rate, c, s);
 }
 
 }  // namespace dpc

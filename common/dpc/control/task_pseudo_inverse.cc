@@ -17,13 +17,14 @@ inline double Dot(const double* x, const double* y, int n) {
 
 }  // namespace
 
-void TaskPseudoInverse::Compute(const TaskJacobian& a) { Factorize(a, 0.0, 0.0); }
+void TaskPseudoInverse::Compute(const TaskJacobian& a) { Factorize<false>(a, 0.0, 0.0); }
 
 void TaskPseudoInverse::ComputeDamped(const TaskJacobian& a, double max_damping,
                                       double threshold) {
-  Factorize(a, max_damping * max_damping, threshold * threshold);
+  Factorize<true>(a, max_damping * max_damping, threshold * threshold);
 }
 
+template <bool kDamped>
 void TaskPseudoInverse::Factorize(const TaskJacobian& a, double max_damping_squared,
                                   double threshold_squared) {
   assert(a.rows() == 1 || a.rows() == 2);
@@ -43,11 +44,15 @@ void TaskPseudoInverse::Factorize(const TaskJacobian& a, double max_damping_squa
       }
       singular_values_ = SingularValues::FromGram(g);
       rank_ = g > 0.0 ? 1 : 0;
-      if (g < threshold_squared) {
-        damping_squared_ = max_damping_squared * (1.0 - g / threshold_squared);
+      if constexpr (kDamped) {
+        if (g < threshold_squared) {
+          damping_squared_ = max_damping_squared * (1.0 - g / threshold_squared);
+        }
+        const double denominator = g + damping_squared_;
+        if (denominator > 0.0) solve_[0][0] = project_[0][0] = 1.0 / denominator;
+      } else {
+        if (rank_) solve_[0][0] = project_[0][0] = 1.0 / g;
       }
-      const double denominator = g + damping_squared_;
-      if (denominator > 0.0) solve_[0][0] = project_[0][0] = 1.0 / denominator;
       return;
     }
     const double* r1 = r0 + n_;
@@ -64,21 +69,24 @@ void TaskPseudoInverse::Factorize(const TaskJacobian& a, double max_damping_squa
       ComputeJacobi(r0, r1, g11, g22, g12, max_damping_squared, threshold_squared);
       return;
     }
-    if (threshold_squared > 0.0) {  // damping: σ_min² = λ2 of G (SingularValues::min_squared)
-      const double root = std::sqrt((g11 - g22) * (g11 - g22) + 4.0 * g12 * g12);
-      const double sigma_min_squared = 2.0 * det / (trace + root);
-      if (sigma_min_squared < threshold_squared) {
-        damping_squared_ = max_damping_squared * (1.0 - sigma_min_squared / threshold_squared);
-      }
-    }
     rank_ = 2;
     for (int i = 0; i < n; ++i) {
       b_[0][i] = r0[i];
       b_[1][i] = r1[i];
     }
-    // (G + λ²I)⁻¹; with λ = 0 exactly G⁻¹ (the same operations as det).
-    const double d11 = g11 + damping_squared_, d22 = g22 + damping_squared_;
-    const double inverse_det = 1.0 / (d11 * d22 - g12 * g12);
+    double d11 = g11, d22 = g22, inverse_det;
+    if constexpr (kDamped) {  // σ_min² = λ2 of G (SingularValues::min_squared); (G + λ²I)⁻¹
+      const double root = std::sqrt((g11 - g22) * (g11 - g22) + 4.0 * g12 * g12);
+      const double sigma_min_squared = 2.0 * det / (trace + root);
+      if (sigma_min_squared < threshold_squared) {
+        damping_squared_ = max_damping_squared * (1.0 - sigma_min_squared / threshold_squared);
+      }
+      d11 += damping_squared_;
+      d22 += damping_squared_;
+      inverse_det = 1.0 / (d11 * d22 - g12 * g12);
+    } else {
+      inverse_det = 1.0 / det;
+    }
     solve_[0][0] = project_[0][0] = d22 * inverse_det;
     solve_[1][1] = project_[1][1] = d11 * inverse_det;
     solve_[0][1] = solve_[1][0] = project_[0][1] = project_[1][0] = -g12 * inverse_det;

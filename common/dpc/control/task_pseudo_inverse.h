@@ -71,7 +71,8 @@ class TaskPseudoInverse {
   /// det G above this fraction of (tr G)² takes the normal-equation path.
   static constexpr double kWellConditioned = 1e-6;
 
-  /// Compute (max_damping_squared = threshold_squared = 0) and ComputeDamped.
+  /// Compute (kDamped = false: the paper's code, no damping arithmetic) and ComputeDamped.
+  template <bool kDamped>
   void Factorize(const TaskJacobian& a, double max_damping_squared, double threshold_squared);
   /// The one-sided Jacobi factorization; with max_damping_squared > 0 damped as ComputeDamped
   /// (threshold_squared = ε²).

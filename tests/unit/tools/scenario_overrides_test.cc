@@ -205,6 +205,13 @@ TEST_F(ScenarioOverridesTest, PredictContradictsNoPredict) {
   EXPECT_EQ(ApplyAndGetErrorLocation({"--predict", "--no-predict"}), "--predict");
 }
 
+TEST_F(ScenarioOverridesTest, TargetLinearIsTheSetS3EqualsZero) {
+  EXPECT_EQ(ApplyAndGetErrorLocation({"--target-linear"}), "");
+  EXPECT_EQ(scenario_.target.kind, TargetConfig::Kind::kSet);
+  EXPECT_EQ(scenario_.target.normal, Vector3::UnitZ());
+  EXPECT_EQ(scenario_.target.offset, 0.0);
+}
+
 TEST_F(ScenarioOverridesTest, OneTargetOnly) {
   EXPECT_EQ(ApplyAndGetErrorLocation({"--target-set", "0,0,1", "--target-point", "0,1,0"}),
             "--target-point");
