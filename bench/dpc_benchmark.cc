@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include <map>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "dpc/config/scenario_config.h"
 #include "dpc/control/control_law_factory.h"
 #include "dpc/control/control_problem.h"
+#include "dpc/control/delay_compensator.h"
 #include "dpc/control/gradient_projection_law.h"
 #include "dpc/sim/closed_loop_simulator.h"
 
@@ -127,13 +129,40 @@ void BM_FullControlStep(benchmark::State& state) {
   }
 }
 
+// What a control update adds in the loop (BM_ControlLoop's second argument).
+enum LoopVariant : int64_t {
+  kPlain = 0,       // the paper's gradient projection
+  kPredict = 1,     // + delay compensation (predictor, aim, lead)
+  kCorrect = 2,     // + delay compensation and the curvature correction
+  kDamped = 3,      // singularity-robust damping only
+  kRange = 4,       // range criterion with saturate-and-re-solve only (ranges ±1)
+};
+
+WaveplateChain LoopChain(int stages, bool ranges) {
+  if (!ranges) return WaveplateChain::FromAxes(Axes(stages));
+  std::vector<WaveplateStage> list;
+  for (char c : Axes(stages)) {
+    list.push_back(WaveplateStage::FixedAxis(c == '1' ? Vector3::UnitX() : Vector3::UnitZ(),
+                                             ControlMap::Linear(M_PI), ControlRange{-1.0, 1.0}));
+  }
+  return WaveplateChain(std::move(list));
+}
+
 // The controller's dependent chain as the simulator runs it: each command's pose is derived
 // from the previous one (incremental sines/cosines), then kinematics, task, law, integration.
 void BM_ControlLoop(benchmark::State& state) {
   const int stages = static_cast<int>(state.range(0));
-  const WaveplateChain chain = WaveplateChain::FromAxes(Axes(stages));
+  const int64_t variant = state.range(1);
+  const WaveplateChain chain = LoopChain(stages, variant == kRange);
   ControlLawConfig config;
+  config.curvature_correction = variant == kCorrect;
+  if (variant == kDamped) config.singularity_damping = 0.25;
+  config.range_aware = variant == kRange;
   std::unique_ptr<ControlLaw> law = MakeControlLaw(config, stages, true);
+  std::optional<DelayCompensator> compensator;
+  if (variant == kPredict || variant == kCorrect) {
+    compensator.emplace(1000.0, IntegratorLagSamples(config.step));
+  }
   ControlProblem problem;
   problem.chain = &chain;
   problem.target = &kPaperTarget;
@@ -149,8 +178,9 @@ void BM_ControlLoop(benchmark::State& state) {
   for (auto _ : state) {
     s_in = turn * s_in;
     problem.pose = &poses[current];
-    problem.s_in = s_in;
+    problem.s_in = compensator ? compensator->Predict(s_in, 50.0) : s_in;
     UpdateControlProblem(&problem);
+    if (compensator) compensator->AddLead(&problem);
     law->ComputeUpdate(problem, &delta);
     phi += delta;
     chain.ComputePoseFrom(poses[current], phi, &poses[1 - current]);
@@ -235,7 +265,14 @@ void RegisterAll() {
       ->Args({4, 1});
   benchmark::RegisterBenchmark("ComputePose", BM_ComputePose)->Arg(3)->Arg(4);
   benchmark::RegisterBenchmark("Kinematics", BM_Kinematics)->Arg(3)->Arg(4);
-  benchmark::RegisterBenchmark("ControlLoop/gp", BM_ControlLoop)->Arg(3)->Arg(4);
+  for (const auto& [name, variant] : std::vector<std::pair<const char*, int64_t>>{
+           {"ControlLoop/gp", kPlain},
+           {"ControlLoop/gp-predict", kPredict},
+           {"ControlLoop/gp-predict-correct", kCorrect},
+           {"ControlLoop/gp-damped", kDamped},
+           {"ControlLoop/gp-range", kRange}}) {
+    benchmark::RegisterBenchmark(name, BM_ControlLoop)->Args({3, variant})->Args({4, variant});
+  }
   benchmark::RegisterBenchmark("ControlStep/gp", BM_FullControlStep)->Args({3, 0})->Args({4, 0});
   benchmark::RegisterBenchmark("ControlStep/gp-svd-baseline", BM_FullControlStep)
       ->Args({3, 1})
@@ -311,6 +348,23 @@ void PrintSummary(const std::map<std::string, CollectingReporter::Entry>& e) {
     fmt::print("{:<22} {:>7} {:>12.1f} {:>16.1f} {:>7.1f}x   (pose + kinematics + task + law)\n",
                "control step (gp)", stages, x->ns_per_iteration, base->ns_per_iteration,
                base->ns_per_iteration / x->ns_per_iteration);
+  }
+  fmt::print("\nControl update in the loop (pose + kinematics + task + law), options against plain gp\n");
+  fmt::print("{:<32} {:>7} {:>12} {:>12} {:>8}\n", "variant", "stages", "ns/update", "plain ns",
+             "added");
+  for (int stages : {3, 4}) {
+    const auto* plain = find(fmt::format("ControlLoop/gp/{}/0", stages));
+    for (const auto& [name, variant] :
+         {std::pair{"gp-predict", 1}, std::pair{"gp-predict-correct", 2},
+          std::pair{"gp-damped", 3}, std::pair{"gp-range", 4}}) {
+      const auto* x = find(fmt::format("ControlLoop/{}/{}/{}", name, stages, variant));
+      if (!x || !plain) continue;
+      const double added = x->ns_per_iteration / plain->ns_per_iteration - 1.0;
+      fmt::print("{:<32} {:>7} {:>12.1f} {:>12.1f} {:>+7.0f}%{}\n", name, stages,
+                 x->ns_per_iteration, plain->ns_per_iteration, 100.0 * added,
+                 variant == 1 ? (added <= 0.30 ? "   goal <= +30%: MET" : "   goal <= +30%: MISSED")
+                              : "");
+    }
   }
   fmt::print("\n{:<22} {:>7} {:>18} {:>22} {:>8}\n", "simulator", "stages", "M samples/s",
              "svd-baseline M samples/s", "ratio");

@@ -34,6 +34,21 @@ std::string FormatList(const std::vector<double>& values) {
   return text;
 }
 
+/// "prediction (window 1000 samples), damping λ0 0.25 below σ 0.5, range criterion, curvature
+/// correction", or "" for the paper's controller.
+std::string OptionsText(const ControllerConfig& c) {
+  std::string text;
+  const auto add = [&text](const std::string& part) { text += (text.empty() ? "" : ", ") + part; };
+  if (c.prediction) add(fmt::format("prediction (window {:g} samples)", c.prediction->window_samples));
+  if (c.singularity_damping) {
+    add(fmt::format("damping λ0 {:g} below σ {:g}", c.singularity_damping->max_damping,
+                    c.singularity_damping->threshold));
+  }
+  if (c.nullspace_criterion == NullspaceCriterion::kRange) add("range criterion");
+  if (c.curvature_correction) add("curvature correction");
+  return text;
+}
+
 }  // namespace
 
 double InputRateRadPerS(const ScenarioConfig& scenario) {
@@ -56,6 +71,12 @@ nlohmann::ordered_json RunSettingsJson(const ClosedLoopSimulator& simulator) {
   j["loop"] = s.controller.loop == LoopMode::kModel ? "model" : "measured";
   j["step"] = s.controller.step;
   j["nullspace_step"] = s.controller.nullspace_step;
+  j["prediction"] = s.controller.prediction.has_value();
+  j["singularity_damping"] = s.controller.singularity_damping
+                                 ? Number(s.controller.singularity_damping->max_damping)
+                                 : nlohmann::ordered_json(nullptr);
+  j["range_criterion"] = s.controller.nullspace_criterion == NullspaceCriterion::kRange;
+  j["curvature_correction"] = s.controller.curvature_correction;
   j["target"] = simulator.target().Describe();
   j["rate_rad_per_s"] = Number(InputRateRadPerS(s));
   j["sample_rate_hz"] = s.simulation.sample_rate_hz;
@@ -121,6 +142,9 @@ std::string RunReportText(const ClosedLoopSimulator& simulator, const Simulation
       s.controller.method == ControlMethod::kThresholdedGradientProjection ||
       s.controller.method == ControlMethod::kExtendedJacobian) {
     text += fmt::format(", null-space step {:g}", s.controller.nullspace_step);
+  }
+  if (const std::string options = OptionsText(s.controller); !options.empty()) {
+    text += "\noptions    " + options;
   }
   text += fmt::format("\ninput      {:.4g} rad/s, target {}\n", InputRateRadPerS(s),
                       simulator.target().Describe());

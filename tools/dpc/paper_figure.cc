@@ -331,7 +331,8 @@ void WritePaperFigure(const std::string& trace_csv, const std::string& png_path,
 }
 
 void WriteRatePlot(const std::string& png_path, const std::string& title,
-                   const std::vector<RateSeries>& series) {
+                   const std::vector<RateSeries>& series,
+                   const std::vector<RateReferenceLine>& references) {
   if (series.empty()) throw std::invalid_argument("WriteRatePlot: no series");
   RequireOutputDirectory(png_path);
   bool any_point = false;
@@ -366,6 +367,15 @@ void WriteRatePlot(const std::string& png_path, const std::string& title,
       }
     }
   }
+  for (const RateReferenceLine& line : references) {
+    if (!IsDrawableOnLogAxes(1.0, line.error_deg)) {
+      throw std::invalid_argument(fmt::format(
+          "WriteRatePlot: reference line '{}' at {} deg cannot be drawn on log axes", line.label,
+          line.error_deg));
+    }
+    error_min = std::min(error_min, line.error_deg);
+    error_max = std::max(error_max, line.error_deg);
+  }
   const DecadeRange x_range = FitDecades(rate_min, rate_max);
   const DecadeRange y_range = FitDecades(error_min, error_max);
 
@@ -397,6 +407,14 @@ void WriteRatePlot(const std::string& png_path, const std::string& title,
                  "set key top left Left reverse samplen 2 spacing 1.2 box lc rgb '#CCCCCC' "
                  "opaque\n");
   if (!title.empty()) fmt::format_to(out, "set title {} noenhanced font ',13'\n", GnuplotQuote(title));
+  for (const RateReferenceLine& line : references) {
+    fmt::format_to(out,
+                   "set arrow from graph 0, first {0:.12g} to graph 1, first {0:.12g} nohead "
+                   "dt 2 lw 1.2 lc rgb '{1}'\n"
+                   "set label {2} noenhanced at graph 0.98, first {0:.12g} right offset 0,0.6 "
+                   "textcolor rgb '{1}'\n",
+                   line.error_deg, kTargetColour, GnuplotQuote(line.label));
+  }
   fmt::format_to(out, "plot ");
   for (size_t k = 0; k < series.size(); ++k) {
     fmt::format_to(out,

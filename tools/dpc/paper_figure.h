@@ -84,14 +84,22 @@ struct RateSeries {
 inline constexpr int kRatePlotWidthPx = 800;
 inline constexpr int kRatePlotHeightPx = 560;
 
+/// A horizontal dashed line across a rate plot at a given error, with its label.
+struct RateReferenceLine {
+  double error_deg;
+  std::string label;
+};
+
 /// A log-log plot of mean error (deg) against input rotation rate (rad/s), one line with points
 /// per series, into a kRatePlotWidthPx × kRatePlotHeightPx PNG. The data is written inline in
 /// the gnuplot script. Points whose rate or error is not finite and positive cannot be drawn
-/// on log axes and are left out.
+/// on log axes and are left out. `references` (finite, positive errors) are drawn as dashed
+/// horizontal lines, the y range widened to include them.
 /// @throws std::invalid_argument if `series` is empty, a series' two vectors differ in length,
 ///         or no point at all can be drawn; std::runtime_error if the PNG's directory does not
 ///         exist or gnuplot fails.
 void WriteRatePlot(const std::string& png_path, const std::string& title,
-                   const std::vector<RateSeries>& series);
+                   const std::vector<RateSeries>& series,
+                   const std::vector<RateReferenceLine>& references = {});
 
 }  // namespace dpc

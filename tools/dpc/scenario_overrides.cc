@@ -15,7 +15,31 @@ void ScenarioOverrides::AddTo(CLI::App& app) {
   app.add_option("--step", step, "Task step mu");
   app.add_option("--nullspace-step", nullspace_step, "Null-space step mu_N (gp, gpt, extended)");
   app.add_option("--threshold", threshold, "|phi_i| above which gpt runs the null-space term");
-  app.add_option("--damping", damping, "Damping lambda (damped, rls)");
+  app.add_option("--damping", damping,
+                 "Damping: lambda of damped and rls; for gp and gpt the largest "
+                 "singularity-robust damping lambda0 (turns it on)");
+  app.add_option("--damping-threshold", damping_threshold,
+                 "gp, gpt: singular value below which the damping starts (default 0.5)");
+  app.add_flag("--predict", predict,
+               "Delay compensation: aim at the input SOP predicted across the loop delay");
+  app.add_flag("--no-predict", no_predict, "No delay compensation (even if the scenario has it)");
+  app.add_option("--predict-window", predict_window,
+                 "Samples of history the predictor fits (default 1000; turns prediction on)");
+  app.add_flag("--correct", correct,
+               "gp, gpt: one curvature correction step per update (exact tracking at high rates)");
+  app.add_option("--range", range,
+                 "Every control in [-R, R]; gp and gpt keep inside with the range criterion "
+                 "and saturate-and-re-solve");
+  app.add_option("--target-point", target_point, "Point target s1,s2,s3 (a unit Stokes vector)")
+      ->delimiter(',')
+      ->expected(3);
+  app.add_option("--target-set", target_set,
+                 "1-D target n.S = c as n1,n2,n3[,c] (e.g. 0,0,1 for s3 = 0: any linear "
+                 "polarization)")
+      ->delimiter(',')
+      ->expected(3, 4);
+  app.add_flag("--target-linear", target_linear,
+               "1-D target s3 = 0: any linear polarization (the same as --target-set 0,0,1)");
   app.add_option("--loop", loop, "Loop mode: model (S_out from the model) or measured");
   app.add_option("--activation-s", activation_s, "Control starts at this time (s)");
   app.add_option("--rate-rad-per-s", rate_rad_per_s,
@@ -79,7 +103,83 @@ void ScenarioOverrides::Apply(ScenarioConfig* s) const {
   set(s->controller.nullspace_step, nullspace_step, "controller.nullspace_step",
       "--nullspace-step");
   set(s->controller.threshold, threshold, "controller.threshold", "--threshold");
-  set(s->controller.damping, damping, "controller.damping", "--damping");
+  const bool gradient_projection =
+      s->controller.method == ControlMethod::kGradientProjection ||
+      s->controller.method == ControlMethod::kThresholdedGradientProjection;
+  if (damping && !gradient_projection) {
+    set(s->controller.damping, damping, "controller.damping", "--damping");
+  } else if (damping || damping_threshold) {
+    SingularityDampingConfig config = s->controller.singularity_damping.value_or(
+        SingularityDampingConfig{});
+    if (damping) config.max_damping = *damping;
+    if (damping_threshold) config.threshold = *damping_threshold;
+    s->controller.singularity_damping = config;
+    if (damping) field_to_flag_["controller.singularity_damping.max_damping"] = "--damping";
+    if (damping_threshold) {
+      field_to_flag_["controller.singularity_damping.threshold"] = "--damping-threshold";
+    }
+  }
+  if (predict && no_predict) {
+    throw ScenarioError("--predict", "contradicts --no-predict");
+  }
+  if (no_predict && predict_window) {
+    throw ScenarioError("--no-predict", "contradicts --predict-window");
+  }
+  if (no_predict) s->controller.prediction.reset();
+  if (predict || predict_window) {
+    PredictionConfig config = s->controller.prediction.value_or(PredictionConfig{});
+    if (predict_window) config.window_samples = *predict_window;
+    s->controller.prediction = config;
+    if (predict_window) {
+      field_to_flag_["controller.prediction.window_samples"] = "--predict-window";
+    } else {
+      field_to_flag_["controller.prediction"] = "--predict";
+    }
+  }
+  if (correct) {
+    s->controller.curvature_correction = true;
+    field_to_flag_["controller.curvature_correction"] = "--correct";
+  }
+  if (range) {
+    const ControlRange r{-*range, *range};
+    for (size_t i = 0; i < s->stages.size(); ++i) {
+      StageConfig& stage = s->stages[i];
+      if (stage.kind == StageConfig::Kind::kFixedAxis) {
+        stage.range = r;
+        field_to_flag_[fmt::format("stages[{}].range", i)] = "--range";
+      } else {
+        if (stage.retardance.controlled) stage.retardance.range = r;
+        if (stage.orientation.controlled) stage.orientation.range = r;
+        field_to_flag_[fmt::format("stages[{}].adjustable_axis", i)] = "--range";
+      }
+    }
+    if (gradient_projection) {
+      s->controller.nullspace_criterion = NullspaceCriterion::kRange;
+      field_to_flag_["controller.nullspace_criterion"] = "--range";
+    }
+  }
+  if (static_cast<int>(!target_point.empty()) + static_cast<int>(!target_set.empty()) +
+          static_cast<int>(target_linear) > 1) {
+    throw ScenarioError(!target_point.empty() ? "--target-point" : "--target-set",
+                        "give one of --target-point, --target-set, --target-linear");
+  }
+  if (target_linear) {
+    s->target.kind = TargetConfig::Kind::kSet;
+    s->target.normal = Vector3::UnitZ();
+    s->target.offset = 0.0;
+    field_to_flag_["target.set"] = "--target-linear";
+  }
+  if (!target_point.empty()) {
+    s->target.kind = TargetConfig::Kind::kPoint;
+    s->target.point = StokesVector(target_point[0], target_point[1], target_point[2]);
+    field_to_flag_["target.point"] = "--target-point";
+  }
+  if (!target_set.empty()) {
+    s->target.kind = TargetConfig::Kind::kSet;
+    s->target.normal = Vector3(target_set[0], target_set[1], target_set[2]);
+    s->target.offset = target_set.size() > 3 ? target_set[3] : 0.0;
+    field_to_flag_["target.set"] = "--target-set";
+  }
   set(s->controller.activation_s, activation_s, "controller.activation_s", "--activation-s");
   set(s->simulation.duration_s, duration_s, "simulation.duration_s", "--duration-s");
   set(s->simulation.delay_s, delay_s, "simulation.delay_s", "--delay-s");

@@ -4,7 +4,18 @@
 //   --stages-axes 3131      stages ← fixed-axis stages S3, S1, S3, S1 with θ = π·φ (the light
 //                           meets the first character first); clears controller.initial_phi
 //   --method gp             controller.method (inverse|transpose|damped|pinv|rls|gp|gpt|…)
-//   --step, --nullspace-step, --threshold, --damping       controller.*
+//   --step, --nullspace-step, --threshold                  controller.*
+//   --damping X             damped, rls: controller.damping (λ); gp, gpt: singularity-robust
+//                           damping on with controller.singularity_damping.max_damping = X
+//   --damping-threshold E   gp, gpt: controller.singularity_damping.threshold (turns it on)
+//   --predict / --no-predict   controller.prediction on (defaults) / off
+//   --predict-window N      controller.prediction.window_samples (turns prediction on)
+//   --correct               controller.curvature_correction (gp, gpt)
+//   --range R               every control's range [−R, R], and for gp / gpt the range criterion
+//                           (controller.nullspace_criterion RANGE, saturate and re-solve)
+//   --target-point s1,s2,s3 target.point
+//   --target-set n1,n2,n3[,c]   target.set: n·S = c (c = 0 if omitted), e.g. 0,0,1 for s3 = 0
+//   --target-linear         target.set s3 = 0: any linear polarization (as `dpc target --linear`)
 //   --loop model|measured   controller.loop
 //   --activation-s          controller.activation_s
 //   --rate-rad-per-s        rate of every paper_scrambler and constant_rotation disturbance;
@@ -21,6 +32,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "dpc/config/scenario_config.h"
 
@@ -30,6 +42,11 @@ struct ScenarioOverrides {
   std::optional<std::string> stages_axes;
   std::optional<std::string> method;
   std::optional<double> step, nullspace_step, threshold, damping, activation_s;
+  std::optional<double> damping_threshold;
+  bool predict = false, no_predict = false, correct = false, target_linear = false;
+  std::optional<double> predict_window;
+  std::optional<double> range;
+  std::vector<double> target_point, target_set;
   std::optional<std::string> loop;
   std::optional<double> rate_rad_per_s;
   bool static_input = false;

@@ -28,7 +28,7 @@ std::atomic<bool> g_stop{false};
 extern "C" void OnSweepInterrupt(int) { g_stop.store(true); }
 
 struct Cell {
-  std::string device, method;
+  std::string device, method, prediction;
   double rate_rad_per_s;
   std::vector<const SimulationResult*> runs;
   int failed = 0;
@@ -41,6 +41,7 @@ std::string SweepFlagFor(const std::string& run_flag) {
   if (run_flag == "--stages-axes") return "--devices";
   if (run_flag == "--rate-rad-per-s") return "--rates";
   if (run_flag == "--seed") return "--seeds";
+  if (run_flag == "--predict" || run_flag == "--no-predict") return "--predictions";
   return run_flag;
 }
 
@@ -66,6 +67,15 @@ CLI::App* AddSweepCommand(CLI::App& app, SweepOptions* o) {
   sweep->add_option("--devices", o->devices,
                     "Stage axes per device, comma separated (e.g. 131,3131)")
       ->delimiter(',');
+  sweep->add_option("--predictions", o->predictions,
+                    "Delay compensation per run, comma separated: off,on (default: as the "
+                    "scenario and --predict say)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"off", "on"}));
+  sweep->add_option("--reference-deg", o->reference_deg,
+                    "Dashed reference lines on the plot at these errors (deg), e.g. 1.15 "
+                    "(40 dB extinction)")
+      ->delimiter(',');
   sweep->add_option("--jobs", o->jobs, "Worker threads (default: all cores)");
   sweep->add_flag("--json", o->json, "Print one JSON object per run (JSON lines)");
   sweep->add_option("--csv", o->csv_path, "Write the aggregated table as CSV");
@@ -90,6 +100,8 @@ int RunSweepCommand(const SweepOptions& o) {
   if (rates.empty()) rates.push_back(InputRateRadPerS(base));
   std::vector<uint64_t> seeds = o.seeds;
   if (seeds.empty()) seeds.push_back(base.simulation.seed);
+  std::vector<std::string> predictions = o.predictions;
+  if (predictions.empty()) predictions.push_back("");
 
   // Build the grid; invalid combinations are reported before anything runs.
   std::vector<std::string> warnings;  // each distinct one once
@@ -98,12 +110,15 @@ int RunSweepCommand(const SweepOptions& o) {
   std::vector<size_t> cell_of_run;
   for (const auto& device : devices) {
     for (const auto& method : methods) {
+     for (const auto& prediction : predictions) {
       for (double rate : rates) {
-        Cell cell{device, method, rate, {}, 0, {}};
+        Cell cell{device, method, prediction, rate, {}, 0, {}};
         for (uint64_t seed : seeds) {
           ScenarioOverrides grid;
           if (!device.empty()) grid.stages_axes = device;
           grid.method = method;
+          grid.predict = prediction == "on";
+          grid.no_predict = prediction == "off";
           if (std::isfinite(rate)) grid.rate_rad_per_s = rate;
           grid.seed = seed;
           ScenarioConfig scenario = base;
@@ -136,6 +151,7 @@ int RunSweepCommand(const SweepOptions& o) {
         }
         cells.push_back(std::move(cell));
       }
+     }
     }
   }
 
@@ -166,12 +182,12 @@ int RunSweepCommand(const SweepOptions& o) {
   }
 
   // Table: mean over seeds of each run's statistics.
-  std::string table = fmt::format("{:<8} {:<9} {:>12} {:>5} {:>10} {:>10} {:>10} {:>8} {:>12} {:>10}\n",
-                                  "device", "method", "rate_rad/s", "runs", "mean_deg", "p99_deg",
-                                  "max_deg", "locked", "extinct_dB", "nullsp_%");
+  std::string table = fmt::format("{:<8} {:<9} {:<4} {:>12} {:>5} {:>10} {:>10} {:>10} {:>8} {:>12} {:>10}\n",
+                                  "device", "method", "pred", "rate_rad/s", "runs", "mean_deg",
+                                  "p99_deg", "max_deg", "locked", "extinct_dB", "nullsp_%");
   std::string csv =
       "device,method,rate_rad_per_s,runs,error_deg_mean,error_deg_p99,error_deg_max,locked_runs,"
-      "extinction_db_mean,nullspace_active_fraction\n";
+      "extinction_db_mean,nullspace_active_fraction,prediction\n";
   std::map<std::string, RateSeries> series;
   for (const Cell& cell : cells) {
     std::vector<double> mean, p99, extinction, nullspace;
@@ -186,17 +202,21 @@ int RunSweepCommand(const SweepOptions& o) {
       locked += r->summary.lock_time_s.has_value();
     }
     const std::string device = cell.device.empty() ? "scenario" : cell.device;
-    table += fmt::format("{:<8} {:<9} {:>12.4g} {:>5} {:>10.4f} {:>10.4f} {:>10.4f} {:>5}/{:<2} {:>12.2f} {:>10.1f}",
-                         device, cell.method, cell.rate_rad_per_s, cell.runs.size(), Mean(mean),
-                         Mean(p99), max, locked, cell.runs.size(), Mean(extinction),
+    const std::string prediction = cell.prediction.empty() ? "-" : cell.prediction;
+    table += fmt::format("{:<8} {:<9} {:<4} {:>12.4g} {:>5} {:>10.4f} {:>10.4f} {:>10.4f} {:>5}/{:<2} {:>12.2f} {:>10.1f}",
+                         device, cell.method, prediction, cell.rate_rad_per_s, cell.runs.size(),
+                         Mean(mean), Mean(p99), max, locked, cell.runs.size(), Mean(extinction),
                          100.0 * Mean(nullspace));
     if (cell.failed) table += fmt::format("  ({} failed: {})", cell.failed, cell.error);
     table += '\n';
-    csv += fmt::format("{},{},{:.9g},{},{:.9g},{:.9g},{:.9g},{},{:.9g},{:.9g}\n", device,
+    csv += fmt::format("{},{},{:.9g},{},{:.9g},{:.9g},{:.9g},{},{:.9g},{:.9g},{}\n", device,
                        cell.method, cell.rate_rad_per_s, cell.runs.size(), Mean(mean), Mean(p99),
-                       max, locked, Mean(extinction), Mean(nullspace));
-    RateSeries& s = series[device == "scenario" ? cell.method : device + " " + cell.method];
-    s.label = device == "scenario" ? cell.method : device + " " + cell.method;
+                       max, locked, Mean(extinction), Mean(nullspace), prediction);
+    std::string label = device == "scenario" ? cell.method : device + " " + cell.method;
+    if (cell.prediction == "on") label += " + prediction";
+    if (cell.prediction == "off") label += ", no prediction";
+    RateSeries& s = series[label];
+    s.label = label;
     if (std::isfinite(Mean(mean))) {
       s.rate_rad_per_s.push_back(cell.rate_rad_per_s);
       s.error_deg.push_back(Mean(mean));
@@ -212,9 +232,13 @@ int RunSweepCommand(const SweepOptions& o) {
     if (!o.plot_path.empty()) {
       std::vector<RateSeries> plot_series;
       for (auto& [label, s] : series) plot_series.push_back(s);
+      std::vector<RateReferenceLine> references;
+      for (double error : o.reference_deg) {
+        references.push_back({error, fmt::format("{:g}°", error)});
+      }
       WriteRatePlot(o.plot_path, fmt::format("{}: mean error against input rotation rate",
                                              base.name),
-                    plot_series);
+                    plot_series, references);
       if (!o.json) fmt::print("plot {}\n", o.plot_path);
     }
   } catch (const std::exception& e) {

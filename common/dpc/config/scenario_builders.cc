@@ -95,6 +95,12 @@ ControlLawConfig BuildControlLawConfig(const ControllerConfig& controller,
   config.threshold = controller.threshold;
   config.damping = controller.damping;
   config.singular_value_tolerance = controller.singular_value_tolerance;
+  if (controller.singularity_damping) {
+    config.singularity_damping = controller.singularity_damping->max_damping;
+    config.singularity_threshold = controller.singularity_damping->threshold;
+  }
+  config.range_aware = controller.nullspace_criterion == NullspaceCriterion::kRange;
+  config.curvature_correction = controller.curvature_correction;
   const DitherConfig& dither = controller.dither;
   config.dither.amplitude = dither.amplitude;
   config.dither.settle_samples = ToIntSamples(

@@ -107,6 +107,26 @@ struct DitherConfig {
   double reset_duration_s = 1e-6;
 };
 
+/// scenario.proto SingularityDamping: damped J⁺ near singularities (gp, gpt):
+/// λ² = max_damping²·(1 − (σ_min/threshold)²) below σ_min = threshold, 0 above.
+struct SingularityDampingConfig {
+  double max_damping = 0.25;  ///< λ0
+  double threshold = 0.5;    ///< ε
+};
+
+/// scenario.proto NullspaceCriterion (gp, gpt).
+enum class NullspaceCriterion {
+  kMinimumNorm,  ///< H = ½‖φ‖² (the paper)
+  kRange,        ///< H = Σ(x²/2 + x⁸/8) in range units, with saturate and re-solve
+};
+
+/// scenario.proto Prediction: delay compensation (delay_compensator.h). Model loop only.
+struct PredictionConfig {
+  double window_samples = 1000;          ///< the predictor's memory, samples
+  std::optional<double> horizon_samples; ///< unset: the loop delay in samples
+  std::optional<double> lead_samples;    ///< unset: (1 − step)/step, the integrator's lag
+};
+
 /// scenario.proto Controller.
 struct ControllerConfig {
   ControlMethod method = ControlMethod::kGradientProjection;
@@ -120,6 +140,10 @@ struct ControllerConfig {
   /// φ before activation, one per control; empty = all zero.
   std::vector<double> initial_phi;
   DitherConfig dither;
+  std::optional<SingularityDampingConfig> singularity_damping;  ///< unset: off
+  NullspaceCriterion nullspace_criterion = NullspaceCriterion::kMinimumNorm;
+  std::optional<PredictionConfig> prediction;                   ///< unset: off
+  bool curvature_correction = false;  ///< gp, gpt: one correction step for the curvature
 };
 
 /// scenario.proto Simulation.

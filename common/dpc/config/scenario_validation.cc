@@ -47,6 +47,11 @@ void RequireNonNegative(double value, const std::string& path, std::string_view 
   if (value < 0.0) Fail(path, fmt::format("{} is negative; {}", value, expected));
 }
 
+/// A finite value at most `max`; `what` names it in the message.
+void RequireAtMost(double value, double max, const std::string& path, std::string_view what) {
+  if (value > max) Fail(path, fmt::format("{} is above {:g}; {} must be at most that", value, max, what));
+}
+
 /// A rotation rate: finite, ≥ 0, and below π rad per sample.
 void RequireRate(double rate_rad_per_s, double sample_rate_hz, const std::string& path) {
   RequireFinite(rate_rad_per_s, path, "a rotation rate must be finite and >= 0 rad/s");
@@ -344,6 +349,70 @@ void ValidateDither(const DitherConfig& dither, double sample_rate_hz) {
   }
 }
 
+bool IsGradientProjection(ControlMethod method) {
+  return method == ControlMethod::kGradientProjection ||
+         method == ControlMethod::kThresholdedGradientProjection;
+}
+
+/// The options beyond the paper: singularity damping, range criterion, prediction.
+void ValidateControllerOptions(const ControllerConfig& controller) {
+  if (controller.singularity_damping) {
+    const std::string path = "controller.singularity_damping";
+    if (!IsGradientProjection(controller.method)) {
+      Fail(path, fmt::format("applies to GP and GPT (the method is {}); DAMPED and RLS have "
+                             "their own controller.damping",
+                             MethodEnumName(controller.method)));
+    }
+    const SingularityDampingConfig& d = *controller.singularity_damping;
+    RequirePositive(d.max_damping, path + ".max_damping",
+                    "the largest damping lambda0 must be > 0 (typical 0.1 to 1)");
+    RequireAtMost(d.max_damping, kMaxSingularityDamping, path + ".max_damping",
+                  "the largest damping lambda0");
+    RequirePositive(d.threshold, path + ".threshold",
+                    "the singular value below which damping starts must be > 0 (typical 0.2 to 1)");
+    RequireAtMost(d.threshold, kMaxSingularityDamping, path + ".threshold",
+                  "the damping threshold");
+  }
+  if (controller.nullspace_criterion == NullspaceCriterion::kRange &&
+      !IsGradientProjection(controller.method)) {
+    Fail("controller.nullspace_criterion",
+         fmt::format("RANGE applies to GP and GPT (the method is {})",
+                     MethodEnumName(controller.method)));
+  }
+  if (controller.curvature_correction && !IsGradientProjection(controller.method)) {
+    Fail("controller.curvature_correction",
+         fmt::format("applies to GP and GPT (the method is {})", MethodEnumName(controller.method)));
+  }
+  if (controller.prediction) {
+    const std::string path = "controller.prediction";
+    if (controller.loop != LoopMode::kModel) {
+      Fail(path, "needs loop MODEL: the prediction replaces the measured input SOP in the "
+                 "model; in the MEASURED loop the error comes from the delayed output "
+                 "polarimeter");
+    }
+    if (controller.method == ControlMethod::kDither) {
+      Fail(path, "applies to the Jacobian laws; DITHER does not use the input SOP");
+    }
+    const PredictionConfig& q = *controller.prediction;
+    RequirePositive(q.window_samples, path + ".window_samples",
+                    "the predictor's window must be > 0 samples (typical 100 to 10000)");
+    RequireAtMost(q.window_samples, kMaxPredictionSamples, path + ".window_samples",
+                  "the predictor's window (samples)");
+    if (q.horizon_samples) {
+      RequireNonNegative(*q.horizon_samples, path + ".horizon_samples",
+                         "the prediction horizon must be >= 0 samples (default: the loop delay)");
+      RequireAtMost(*q.horizon_samples, kMaxPredictionSamples, path + ".horizon_samples",
+                    "the prediction horizon (samples)");
+    }
+    if (q.lead_samples) {
+      RequireNonNegative(*q.lead_samples, path + ".lead_samples",
+                         "the lead must be >= 0 samples (default (1 - step)/step)");
+      RequireAtMost(*q.lead_samples, kMaxPredictionSamples, path + ".lead_samples",
+                    "the lead (samples)");
+    }
+  }
+}
+
 void ValidateController(const ControllerConfig& controller, int control_count,
                         const TargetConfig& target, const SimulationConfig& simulation) {
   RequirePositive(controller.step, "controller.step",
@@ -397,6 +466,7 @@ void ValidateController(const ControllerConfig& controller, int control_count,
     }
   }
   ValidateDither(controller.dither, simulation.sample_rate_hz);
+  ValidateControllerOptions(controller);
 }
 
 // ---- Simulation.
@@ -530,6 +600,18 @@ void ValidateScenario(const ScenarioConfig& scenario) {
   ValidateTarget(scenario.target);
   ValidateController(scenario.controller, ScenarioControlCount(scenario.stages), scenario.target,
                      scenario.simulation);
+  if (scenario.controller.nullspace_criterion == NullspaceCriterion::kRange) {
+    bool any_range = false;
+    for (const StageConfig& stage : scenario.stages) {
+      any_range = any_range || stage.range || (stage.retardance.controlled && stage.retardance.range) ||
+                  (stage.orientation.controlled && stage.orientation.range);
+    }
+    if (!any_range) {
+      Fail("controller.nullspace_criterion",
+           "RANGE keeps the controls inside their ranges, but no stage has a range; give "
+           "stages[i].range (e.g. { min: -1 max: 1 })");
+    }
+  }
 }
 
 }  // namespace dpc

@@ -33,7 +33,12 @@
 //                singular_value_tolerance ∈ (0, 1); activation_s ∈ [0, duration_s);
 //                initial_phi empty or one value per control; inverse and damped need a square
 //                task (3 controls for a point target, 1 for a set); dither: amplitude > 0,
-//                0 ≤ settle_samples ≤ 1e7, reset_threshold > 0, dt ≤ reset_duration_s ≤ 1e7·dt.
+//                0 ≤ settle_samples ≤ 1e7, reset_threshold > 0, dt ≤ reset_duration_s ≤ 1e7·dt;
+//                singularity_damping (GP, GPT only): 0 < max_damping, threshold ≤ 1e3;
+//                nullspace_criterion RANGE and curvature_correction: GP or GPT (RANGE also
+//                needs some stage with a range);
+//                prediction: loop MODEL, not DITHER, 0 < window_samples ≤ 1e9,
+//                0 ≤ horizon_samples, lead_samples ≤ 1e9.
 
 #include <cstdint>
 #include <vector>
@@ -51,6 +56,10 @@ inline constexpr int64_t kMaxDelaySamples = 10'000'000;
 inline constexpr int64_t kMaxTotalSamples = 1'000'000'000'000;
 /// The highest sample rate accepted, Hz.
 inline constexpr double kMaxSampleRateHz = 1e10;
+/// The largest singularity damping λ0 and threshold ε accepted.
+inline constexpr double kMaxSingularityDamping = 1e3;
+/// The longest prediction window, horizon and lead accepted, in samples.
+inline constexpr double kMaxPredictionSamples = 1e9;
 /// The shortest axis or set normal accepted (they are normalized).
 inline constexpr double kMinAxisLength = 1e-9;
 

@@ -68,13 +68,18 @@ std::unique_ptr<ControlLaw> MakeControlLaw(const ControlLawConfig& config, int c
     case ControlMethod::kRegularizedLeastSquares:
       return std::make_unique<RegularizedLeastSquaresLaw>(config.step, config.damping);
     case ControlMethod::kGradientProjection:
-      return std::make_unique<GradientProjectionLaw>(config.step, config.nullspace_step,
-                                                     std::nullopt,
-                                                     config.singular_value_tolerance);
-    case ControlMethod::kThresholdedGradientProjection:
-      return std::make_unique<GradientProjectionLaw>(config.step, config.nullspace_step,
-                                                     config.threshold,
-                                                     config.singular_value_tolerance);
+    case ControlMethod::kThresholdedGradientProjection: {
+      GradientProjectionOptions options;
+      if (config.method == ControlMethod::kThresholdedGradientProjection) {
+        options.threshold = config.threshold;
+      }
+      options.singular_value_tolerance = config.singular_value_tolerance;
+      options.max_damping = config.singularity_damping;
+      options.damping_threshold = config.singularity_threshold;
+      options.range_aware = config.range_aware;
+      options.curvature_correction = config.curvature_correction;
+      return std::make_unique<GradientProjectionLaw>(config.step, config.nullspace_step, options);
+    }
     case ControlMethod::kExtendedJacobian:
       return std::make_unique<ExtendedJacobianLaw>(config.step, config.nullspace_step);
     case ControlMethod::kDither:

@@ -7,8 +7,9 @@
 //   damped      DampedJacobianLaw                        step, damping
 //   pinv        PseudoInverseLaw                         step
 //   rls         RegularizedLeastSquaresLaw               step, damping
-//   gp          GradientProjectionLaw                    step, nullspace_step
-//   gpt         GradientProjectionLaw with threshold     step, nullspace_step, threshold
+//   gp          GradientProjectionLaw                    step, nullspace_step, singularity_*,
+//                                                        range_aware
+//   gpt         GradientProjectionLaw with threshold     the same and threshold
 //   extended    ExtendedJacobianLaw                      step, nullspace_step
 //   dither      DitheringLaw                             step, dither.*
 
@@ -48,6 +49,13 @@ struct ControlLawConfig {
   double damping = 1e-3;        ///< λ (damped, rls)
   double singular_value_tolerance = 1e-12;  ///< relative, for J⁺
   DitherSettings dither;        ///< dither only
+  /// gp, gpt: singularity-robust damping λ0 (0: off) and the σ_min below which it starts.
+  double singularity_damping = 0.0;
+  double singularity_threshold = 0.5;
+  /// gp, gpt: the range criterion with saturate and re-solve (gradient_projection_law.h).
+  bool range_aware = false;
+  /// gp, gpt: one curvature correction step per update.
+  bool curvature_correction = false;
 };
 
 /// Builds the configured law for `chain` and `target`. Throws std::invalid_argument when the

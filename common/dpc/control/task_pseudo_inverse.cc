@@ -2,6 +2,7 @@
 
 #include "dpc/optics/count_dispatch.h"
 
+#include <algorithm>
 #include <cassert>
 #include <cmath>
 
@@ -16,10 +17,20 @@ inline double Dot(const double* x, const double* y, int n) {
 
 }  // namespace
 
-void TaskPseudoInverse::Compute(const TaskJacobian& a) {
+void TaskPseudoInverse::Compute(const TaskJacobian& a) { Factorize<false>(a, 0.0, 0.0); }
+
+void TaskPseudoInverse::ComputeDamped(const TaskJacobian& a, double max_damping,
+                                      double threshold) {
+  Factorize<true>(a, max_damping * max_damping, threshold * threshold);
+}
+
+template <bool kDamped>
+void TaskPseudoInverse::Factorize(const TaskJacobian& a, double max_damping_squared,
+                                  double threshold_squared) {
   assert(a.rows() == 1 || a.rows() == 2);
   rows_ = static_cast<int>(a.rows());
   n_ = static_cast<int>(a.cols());
+  damping_squared_ = 0.0;
   const double* r0 = a.data();  // row-major: rows are contiguous
   solve_[0][0] = solve_[0][1] = solve_[1][0] = solve_[1][1] = 0.0;
   project_[0][0] = project_[0][1] = project_[1][0] = project_[1][1] = 0.0;
@@ -33,7 +44,15 @@ void TaskPseudoInverse::Compute(const TaskJacobian& a) {
       }
       singular_values_ = SingularValues::FromGram(g);
       rank_ = g > 0.0 ? 1 : 0;
-      if (rank_) solve_[0][0] = project_[0][0] = 1.0 / g;
+      if constexpr (kDamped) {
+        if (g < threshold_squared) {
+          damping_squared_ = max_damping_squared * (1.0 - g / threshold_squared);
+        }
+        const double denominator = g + damping_squared_;
+        if (denominator > 0.0) solve_[0][0] = project_[0][0] = 1.0 / denominator;
+      } else {
+        if (rank_) solve_[0][0] = project_[0][0] = 1.0 / g;
+      }
       return;
     }
     const double* r1 = r0 + n_;
@@ -46,7 +65,8 @@ void TaskPseudoInverse::Compute(const TaskJacobian& a) {
     const double trace = g11 + g22;
     const double det = g11 * g22 - g12 * g12;
     if (!(det > kWellConditioned * trace * trace)) {
-      ComputeJacobi(r0, r1, g11, g22, g12);
+      // The Jacobi path measures σ_min accurately; it damps there.
+      ComputeJacobi(r0, r1, g11, g22, g12, max_damping_squared, threshold_squared);
       return;
     }
     rank_ = 2;
@@ -54,16 +74,29 @@ void TaskPseudoInverse::Compute(const TaskJacobian& a) {
       b_[0][i] = r0[i];
       b_[1][i] = r1[i];
     }
-    const double inverse_det = 1.0 / det;
-    solve_[0][0] = project_[0][0] = g22 * inverse_det;
-    solve_[1][1] = project_[1][1] = g11 * inverse_det;
+    double d11 = g11, d22 = g22, inverse_det;
+    if constexpr (kDamped) {  // σ_min² = λ2 of G (SingularValues::min_squared); (G + λ²I)⁻¹
+      const double root = std::sqrt((g11 - g22) * (g11 - g22) + 4.0 * g12 * g12);
+      const double sigma_min_squared = 2.0 * det / (trace + root);
+      if (sigma_min_squared < threshold_squared) {
+        damping_squared_ = max_damping_squared * (1.0 - sigma_min_squared / threshold_squared);
+      }
+      d11 += damping_squared_;
+      d22 += damping_squared_;
+      inverse_det = 1.0 / (d11 * d22 - g12 * g12);
+    } else {
+      inverse_det = 1.0 / det;
+    }
+    solve_[0][0] = project_[0][0] = d22 * inverse_det;
+    solve_[1][1] = project_[1][1] = d11 * inverse_det;
     solve_[0][1] = solve_[1][0] = project_[0][1] = project_[1][0] = -g12 * inverse_det;
     singular_values_ = SingularValues::FromGram(g11, g22, g12, det);
   });
 }
 
 void TaskPseudoInverse::ComputeJacobi(const double* r0, const double* r1, double g11,
-                                      double g22, double g12) {
+                                      double g22, double g12, double max_damping_squared,
+                                      double threshold_squared) {
   const int n = n_;
   // Jacobi rotation zeroing the off-diagonal of G (Golub & Van Loan, 2 × 2 symmetric Schur).
   double c = 1.0, s = 0.0;
@@ -95,10 +128,15 @@ void TaskPseudoInverse::ComputeJacobi(const double* r0, const double* r1, double
   const double norm1 = Dot(b_[1], b_[1], n);
   const double sigma0 = std::sqrt(norm0), sigma1 = std::sqrt(norm1);
   singular_values_ = SingularValues::Exact(sigma0, sigma1);
-  const double inverse0 = 1.0 / norm0;
   const bool full_rank = sigma1 > relative_tolerance_ * sigma0;
-  const double inverse1 = full_rank ? 1.0 / norm1 : 0.0;
   rank_ = full_rank ? 2 : 1;
+  // Damping (ComputeDamped only): λ² from σ_min = σ1 here.
+  const double lambda_squared =
+      norm1 < threshold_squared ? max_damping_squared * (1.0 - norm1 / threshold_squared) : 0.0;
+  damping_squared_ = lambda_squared;
+  const double inverse0 = 1.0 / (norm0 + lambda_squared);
+  const double inverse1 =
+      full_rank || lambda_squared > 0.0 ? 1.0 / (norm1 + lambda_squared) : 0.0;
   solve_[0][0] = inverse0 * u0[0];
   solve_[0][1] = inverse0 * u0[1];
   solve_[1][0] = inverse1 * u1[0];

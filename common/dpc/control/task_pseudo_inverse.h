@@ -20,6 +20,17 @@
 //
 // The singular values of the reduced task equal those of the full 3 × n Jacobian (A = EᵀJ with
 // E orthonormal and J's columns in E's span). No allocation.
+//
+// Singularity-robust damping (ComputeDamped; Nakamura & Hanafusa 1986, Maciejewski 1988): the
+// damped least-squares inverse A_λ⁺ = Aᵀ(AAᵀ + λ²I)⁻¹ = Σ σ_i/(σ_i² + λ²) v_i u_iᵀ with the
+// damping switched on only near a singularity, as the smallest singular value σ_d falls below ε:
+//
+//   λ² = λ0²·(1 − (σ_d/ε)²)  for σ_d < ε,   0 otherwise
+//
+// and the matching projector I − A_λ⁺A = I − Σ σ_i²/(σ_i² + λ²) v_i v_iᵀ (the same formulas
+// with S = P = (G + λ²I)⁻¹, or diag(1/(σ_i² + λ²)) on the Jacobi path). Away from singularities
+// (σ_d ≥ ε) it is Compute exactly; at σ_d = 0 the task step along the lost direction is 0
+// instead of unbounded. rank() and singular_values() stay those of A.
 
 #include "dpc/control/control_problem.h"
 #include "dpc/control/singular_values.h"
@@ -34,6 +45,11 @@ class TaskPseudoInverse {
 
   /// Real-time. Factorizes `a` (1 or 2 rows, at most kMaxControls columns).
   void Compute(const TaskJacobian& a);
+  /// Real-time. Factorizes `a` with singularity-robust damping: λ0 = max_damping ≥ 0, ε =
+  /// threshold > 0 (see the file comment). damping_squared() tells the λ² used.
+  void ComputeDamped(const TaskJacobian& a, double max_damping, double threshold);
+  /// λ² of the latest factorization (0 from Compute).
+  double damping_squared() const { return damping_squared_; }
 
   int rank() const { return rank_; }
   /// The singular values (evaluated when read); σ_min is the smallest of the d.
@@ -55,12 +71,19 @@ class TaskPseudoInverse {
   /// det G above this fraction of (tr G)² takes the normal-equation path.
   static constexpr double kWellConditioned = 1e-6;
 
-  void ComputeJacobi(const double* r0, const double* r1, double g11, double g22, double g12);
+  /// Compute (kDamped = false: the paper's code, no damping arithmetic) and ComputeDamped.
+  template <bool kDamped>
+  void Factorize(const TaskJacobian& a, double max_damping_squared, double threshold_squared);
+  /// The one-sided Jacobi factorization; with max_damping_squared > 0 damped as ComputeDamped
+  /// (threshold_squared = ε²).
+  void ComputeJacobi(const double* r0, const double* r1, double g11, double g22, double g12,
+                     double max_damping_squared = 0.0, double threshold_squared = 0.0);
 
   double relative_tolerance_;
   int rows_ = 1;
   int rank_ = 0;
   int n_ = 0;
+  double damping_squared_ = 0.0;
   SingularValues singular_values_;
   double solve_[2][2] = {};    ///< S
   double project_[2][2] = {};  ///< P

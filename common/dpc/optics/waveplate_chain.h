@@ -113,6 +113,9 @@ class WaveplateChain {
   /// Real-time. Clamps each control with a range into it; returns how many were outside.
   int ClampToRanges(ControlVector* phi) const;
   bool has_ranges() const { return has_ranges_; }
+  /// Each control's range limits (−∞ / +∞ for an unbounded control), one per control.
+  const std::vector<double>& range_min() const { return range_min_; }
+  const std::vector<double>& range_max() const { return range_max_; }
 
   /// "R1 R3 R1".
   std::string Describe() const;

@@ -274,6 +274,30 @@ ControllerConfig ControllerFromProto(const scenario::Controller& p) {
   if (dither.has_settle_samples()) c.dither.settle_samples = dither.settle_samples();
   if (dither.has_reset_threshold()) c.dither.reset_threshold = dither.reset_threshold();
   if (dither.has_reset_duration_s()) c.dither.reset_duration_s = dither.reset_duration_s();
+  if (p.has_singularity_damping()) {
+    SingularityDampingConfig damping;
+    const scenario::SingularityDamping& d = p.singularity_damping();
+    if (d.has_max_damping()) damping.max_damping = d.max_damping();
+    if (d.has_threshold()) damping.threshold = d.threshold();
+    c.singularity_damping = damping;
+  }
+  switch (p.nullspace_criterion()) {
+    case scenario::NULLSPACE_CRITERION_UNSPECIFIED:
+    case scenario::MIN_NORM: c.nullspace_criterion = NullspaceCriterion::kMinimumNorm; break;
+    case scenario::RANGE: c.nullspace_criterion = NullspaceCriterion::kRange; break;
+    default:
+      FailEnum("controller.nullspace_criterion", p.nullspace_criterion(),
+               scenario::NullspaceCriterion_descriptor());
+  }
+  if (p.has_prediction()) {
+    PredictionConfig prediction;
+    const scenario::Prediction& q = p.prediction();
+    if (q.has_window_samples()) prediction.window_samples = q.window_samples();
+    if (q.has_horizon_samples()) prediction.horizon_samples = q.horizon_samples();
+    if (q.has_lead_samples()) prediction.lead_samples = q.lead_samples();
+    c.prediction = prediction;
+  }
+  c.curvature_correction = p.curvature_correction();
   return c;
 }
 
@@ -440,6 +464,21 @@ void ControllerToProto(const ControllerConfig& c, scenario::Controller* p) {
   dither->set_settle_samples(c.dither.settle_samples);
   dither->set_reset_threshold(c.dither.reset_threshold);
   dither->set_reset_duration_s(c.dither.reset_duration_s);
+  if (c.singularity_damping) {
+    scenario::SingularityDamping* d = p->mutable_singularity_damping();
+    d->set_max_damping(c.singularity_damping->max_damping);
+    d->set_threshold(c.singularity_damping->threshold);
+  }
+  p->set_nullspace_criterion(c.nullspace_criterion == NullspaceCriterion::kRange
+                                 ? scenario::RANGE
+                                 : scenario::MIN_NORM);
+  if (c.prediction) {
+    scenario::Prediction* q = p->mutable_prediction();
+    q->set_window_samples(c.prediction->window_samples);
+    if (c.prediction->horizon_samples) q->set_horizon_samples(*c.prediction->horizon_samples);
+    if (c.prediction->lead_samples) q->set_lead_samples(*c.prediction->lead_samples);
+  }
+  p->set_curvature_correction(c.curvature_correction);
 }
 
 void SimulationToProto(const SimulationConfig& s, scenario::Simulation* p) {

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "dpc/config/scenario_builders.h"
+#include "dpc/control/delay_compensator.h"
 #include "dpc/sim/delay_line.h"
 #include "dpc/sim/simulation_run.h"
 #include "dpc/config/scenario_validation.h"
@@ -40,7 +41,11 @@ std::optional<ClosedLoopSimulator::FastPathPlan> ClosedLoopSimulator::PlanFastPa
                         c.method == ControlMethod::kThresholdedGradientProjection ||
                         c.method == ControlMethod::kPseudoInverse;
   const int stages = chain.stage_count();
-  if (custom_law || !law_fits || scenario.target.kind != TargetConfig::Kind::kPoint ||
+  // The options beyond the paper run in the general loop (the fused loop stays the paper's).
+  const bool paper_options = !c.prediction && !c.singularity_damping && !c.curvature_correction &&
+                             c.nullspace_criterion == NullspaceCriterion::kMinimumNorm;
+  if (custom_law || !law_fits || !paper_options ||
+      scenario.target.kind != TargetConfig::Kind::kPoint ||
       (stages != 3 && stages != 4) || chain.control_count() != stages || chain.has_ranges()) {
     return std::nullopt;
   }
@@ -97,6 +102,15 @@ SimulationResult ClosedLoopSimulator::RunGeneral(SimulationObserver* observer,
   problem.loop_mode = scenario_.controller.loop;
   problem.need_jacobian = law->needs_jacobian();
   ControlVector delta_phi;
+  std::optional<DelayCompensator> compensator;
+  double horizon_samples = 0.0;
+  if (const auto& prediction = scenario_.controller.prediction) {
+    compensator.emplace(prediction->window_samples,
+                        prediction->lead_samples.value_or(
+                            IntegratorLagSamples(scenario_.controller.step)));
+    horizon_samples =
+        prediction->horizon_samples.value_or(static_cast<double>(delay_samples_));
+  }
 
   // Blocks of up to D samples: a command issued in a block acts D samples later, so never in
   // the same block. Each block first runs the input, the plant and the polarimeters for all its
@@ -136,9 +150,12 @@ SimulationResult ClosedLoopSimulator::RunGeneral(SimulationObserver* observer,
       if (sample >= activation_sample_) {
         if (sample == activation_sample_) law->Activate(integrator.phi());
         problem.pose = &line.latest();
-        problem.s_in = in_measured[static_cast<size_t>(i)];
+        problem.s_in = compensator ? compensator->Predict(in_measured[static_cast<size_t>(i)],
+                                                          horizon_samples)
+                                   : in_measured[static_cast<size_t>(i)];
         problem.s_out_measured = out_measured[static_cast<size_t>(i)];
         UpdateControlProblem(&problem);
+        if (compensator) compensator->AddLead(&problem);
         const ControlStatus status = law->ComputeUpdate(problem, &delta_phi);
         const ControlIntegrator::Outcome outcome = integrator.Apply(status, delta_phi);
         const ControlDiagnostics& diagnostics = law->diagnostics();

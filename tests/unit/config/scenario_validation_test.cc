@@ -437,6 +437,66 @@ TEST_F(ScenarioValidationTest, DampedWithASetTargetNeedsOneControl) {
   EXPECT_EQ(ErrorLocation(), "(valid)");
 }
 
+TEST_F(ScenarioValidationTest, SingularityDampingIsChecked) {
+  scenario_.controller.singularity_damping = SingularityDampingConfig{};
+  EXPECT_EQ(ErrorLocation(), "(valid)");
+  scenario_.controller.singularity_damping->max_damping = kNaN;
+  EXPECT_EQ(ErrorLocation(), "controller.singularity_damping.max_damping");
+  scenario_.controller.singularity_damping->max_damping = 0.0;
+  EXPECT_EQ(ErrorLocation(), "controller.singularity_damping.max_damping");
+  scenario_.controller.singularity_damping->max_damping = 1e4;
+  EXPECT_EQ(ErrorLocation(), "controller.singularity_damping.max_damping");
+  scenario_.controller.singularity_damping->max_damping = 0.5;
+  scenario_.controller.singularity_damping->threshold = -1.0;
+  EXPECT_EQ(ErrorLocation(), "controller.singularity_damping.threshold");
+  scenario_.controller.singularity_damping->threshold = kInf;
+  EXPECT_EQ(ErrorLocation(), "controller.singularity_damping.threshold");
+  scenario_.controller.singularity_damping->threshold = 0.5;
+  scenario_.controller.method = ControlMethod::kPseudoInverse;
+  EXPECT_EQ(ErrorLocation(), "controller.singularity_damping");
+  EXPECT_THAT(ErrorMessage(), HasSubstr("GP and GPT"));
+}
+
+TEST_F(ScenarioValidationTest, RangeCriterionNeedsGradientProjectionAndRanges) {
+  scenario_.controller.nullspace_criterion = NullspaceCriterion::kRange;
+  EXPECT_EQ(ErrorLocation(), "controller.nullspace_criterion");
+  EXPECT_THAT(ErrorMessage(), HasSubstr("no stage has a range"));
+  for (StageConfig& stage : scenario_.stages) stage.range = ControlRange{-1.0, 1.0};
+  EXPECT_EQ(ErrorLocation(), "(valid)");
+  scenario_.controller.method = ControlMethod::kExtendedJacobian;
+  EXPECT_EQ(ErrorLocation(), "controller.nullspace_criterion");
+}
+
+TEST_F(ScenarioValidationTest, PredictionIsChecked) {
+  scenario_.controller.prediction = PredictionConfig{};
+  EXPECT_EQ(ErrorLocation(), "(valid)");
+  PredictionConfig& q = *scenario_.controller.prediction;
+  q.window_samples = 0.0;
+  EXPECT_EQ(ErrorLocation(), "controller.prediction.window_samples");
+  q.window_samples = kNaN;
+  EXPECT_EQ(ErrorLocation(), "controller.prediction.window_samples");
+  q.window_samples = 1e10;
+  EXPECT_EQ(ErrorLocation(), "controller.prediction.window_samples");
+  q.window_samples = 1000;
+  q.horizon_samples = -1.0;
+  EXPECT_EQ(ErrorLocation(), "controller.prediction.horizon_samples");
+  q.horizon_samples = kInf;
+  EXPECT_EQ(ErrorLocation(), "controller.prediction.horizon_samples");
+  q.horizon_samples = 50.0;
+  q.lead_samples = kNaN;
+  EXPECT_EQ(ErrorLocation(), "controller.prediction.lead_samples");
+  q.lead_samples = -2.0;
+  EXPECT_EQ(ErrorLocation(), "controller.prediction.lead_samples");
+  q.lead_samples = 9.0;
+  EXPECT_EQ(ErrorLocation(), "(valid)");
+  scenario_.controller.loop = LoopMode::kMeasured;
+  EXPECT_EQ(ErrorLocation(), "controller.prediction");
+  EXPECT_THAT(ErrorMessage(), HasSubstr("MODEL"));
+  scenario_.controller.loop = LoopMode::kModel;
+  scenario_.controller.method = ControlMethod::kDither;
+  EXPECT_EQ(ErrorLocation(), "controller.prediction");
+}
+
 TEST_F(ScenarioValidationTest, DitherSettingsAreChecked) {
   scenario_.controller.dither.amplitude = 0.0;
   EXPECT_EQ(ErrorLocation(), "controller.dither.amplitude");

@@ -105,3 +105,201 @@ TEST_F(GradientProjectionLawTest, RejectsBadParameters) {
 
 }  // namespace
 }  // namespace dpc
+
+namespace dpc {
+namespace {
+
+using testing::ControlFixture;
+
+// R1R3R1 at φ = 0 with S_in in the s1–s3 plane is singular: the columns S1 × S_in and
+// S3 × S_in are parallel (and the third equals the first). A small offset of S_in out of the
+// plane makes σ_min small but non-zero.
+class GradientProjectionDampingTest : public ::testing::Test, public ControlFixture {
+ protected:
+  GradientProjectionDampingTest() : ControlFixture("131") {}
+};
+
+TEST_F(GradientProjectionDampingTest, DampingBoundsTheStepNearAConstructedSingularity) {
+  const Target target = Target::Point(StokesVector(0, 0.6, 0.8));
+  const ControlVector phi = ControlVector::Zero(3);
+  GradientProjectionOptions options;
+  options.max_damping = 0.5;
+  options.damping_threshold = 0.5;
+  GradientProjectionLaw plain(0.1, 0.1), damped(0.1, 0.1, options);
+  for (double offset : {1e-2, 1e-4, 1e-6}) {
+    const StokesVector s_in = StokesVector(0.6, offset, 0.8).normalized();
+    ControlProblem& p = Build(phi, s_in, target);
+    ControlVector plain_delta, damped_delta;
+    ASSERT_TRUE(IsUsable(plain.ComputeUpdate(p, &plain_delta)));
+    ASSERT_TRUE(IsUsable(damped.ComputeUpdate(p, &damped_delta)));
+    EXPECT_LT(plain.diagnostics().singular_values.min(), 0.1);
+    // Plain: the step grows like 1/σ_min. Damped: bounded by μ|e|/ε whatever σ_min.
+    EXPECT_GT(plain_delta.norm(), 0.1 * 0.5 / (10.0 * offset));
+    EXPECT_LT(damped_delta.norm(), 0.1 * 2.0 / 0.5);
+    EXPECT_GT(damped.damping_squared(), 0.0);
+  }
+}
+
+TEST_F(GradientProjectionDampingTest, AwayFromSingularitiesDampingChangesNothing) {
+  const Target target = Target::Point(StokesVector(0, 0.6, 0.8));
+  GradientProjectionOptions options;
+  options.max_damping = 0.5;
+  options.damping_threshold = 0.2;
+  GradientProjectionLaw plain(0.1, 0.1), damped(0.1, 0.1, options);
+  int compared = 0;
+  for (int trial = 0; trial < 50; ++trial) {
+    ControlProblem& p = Build(RandomPhi(0.7), RandomSop(), target);
+    ControlVector plain_delta, damped_delta;
+    ASSERT_TRUE(IsUsable(plain.ComputeUpdate(p, &plain_delta)));
+    ASSERT_TRUE(IsUsable(damped.ComputeUpdate(p, &damped_delta)));
+    if (plain.diagnostics().singular_values.min() < 0.2) continue;
+    EXPECT_LT((plain_delta - damped_delta).norm(), 1e-12);
+    ++compared;
+  }
+  EXPECT_GT(compared, 30);
+}
+
+// 4 stages R3R1R3R1 (light order S3, S1, S3, S1), each with range [−1, 1].
+WaveplateChain RangedChain(const std::string& axes, double limit) {
+  std::vector<WaveplateStage> stages;
+  for (char c : axes) {
+    const Vector3 axis = c == '1' ? Vector3::UnitX() : c == '2' ? Vector3::UnitY() : Vector3::UnitZ();
+    stages.push_back(
+        WaveplateStage::FixedAxis(axis, ControlMap::Linear(M_PI), ControlRange{-limit, limit}));
+  }
+  return WaveplateChain(std::move(stages));
+}
+
+// A closed model loop against a rotating input, φ integrated as the simulator does.
+struct RangeLoopResult {
+  double largest_phi = 0.0;
+  double final_error_rad = 0.0;
+  int saturated_updates = 0;
+};
+
+RangeLoopResult RunRangeLoop(const WaveplateChain& chain, GradientProjectionLaw* law,
+                             int updates, double rad_per_update) {
+  const Target target = Target::Point(StokesVector(0, 0.6, 0.8));
+  ControlProblem problem;
+  problem.chain = &chain;
+  problem.target = &target;
+  problem.need_jacobian = false;
+  ChainPose pose;
+  ControlVector phi = ControlVector::Zero(chain.control_count()), delta;
+  const Matrix3 turn = RotationAboutAxis(Vector3(0.2, 0.3, 1.0).normalized(), rad_per_update);
+  StokesVector s_in = StokesVector(1, 0, 0);
+  RangeLoopResult result;
+  for (int k = 0; k < updates; ++k) {
+    s_in = turn * s_in;
+    chain.ComputePose(phi, &pose);
+    problem.pose = &pose;
+    problem.s_in = s_in;
+    UpdateControlProblem(&problem);
+    if (!IsUsable(law->ComputeUpdate(problem, &delta))) continue;
+    phi += delta;  // no clamp: the law alone must keep φ inside
+    result.saturated_updates += law->saturated_controls() > 0;
+    for (int i = 0; i < phi.size(); ++i) {
+      result.largest_phi = std::max(result.largest_phi, std::abs(phi[i]));
+    }
+  }
+  chain.ComputePose(phi, &pose);
+  result.final_error_rad = target.DistanceRad(chain.Output(pose, s_in));
+  return result;
+}
+
+TEST(GradientProjectionRangeTest, RangeNeverExceededWhileTracking) {
+  for (const std::string axes : {"3131", "131"}) {
+    const WaveplateChain chain = RangedChain(axes, 1.0);
+    GradientProjectionOptions options;
+    options.range_aware = true;
+    options.max_damping = 0.5;
+    GradientProjectionLaw law(0.5, 0.2, options);
+    const RangeLoopResult r = RunRangeLoop(chain, &law, 20000, 0.01);
+    EXPECT_LE(r.largest_phi, 1.0) << axes;
+    EXPECT_LT(r.final_error_rad, 0.1) << axes;
+  }
+}
+
+TEST(GradientProjectionRangeTest, SaturatesAtTheLimitAndSolvesTheTaskWithTheOthers) {
+  // A narrow range that the task needs to leave: the controls that would leave are fixed at
+  // their limits and the others still reduce the error.
+  const WaveplateChain chain = RangedChain("3131", 0.3);
+  const Target target = Target::Point(StokesVector(0, 0.6, 0.8));
+  GradientProjectionOptions options;
+  options.range_aware = true;
+  GradientProjectionLaw law(1.0, 0.0, options);
+  ControlProblem problem;
+  problem.chain = &chain;
+  problem.target = &target;
+  problem.need_jacobian = true;
+  ChainPose pose;
+  ControlVector phi(4);
+  phi << 0.29, -0.1, 0.2, 0.0;
+  chain.ComputePose(phi, &pose);
+  problem.pose = &pose;
+  problem.s_in = StokesVector(0.2, -0.9, 0.3).normalized();
+  UpdateControlProblem(&problem);
+  const double before = target.DistanceRad(problem.kinematics.s_out);
+  ControlVector delta;
+  ASSERT_TRUE(IsUsable(law.ComputeUpdate(problem, &delta)));
+  EXPECT_GT(law.saturated_controls(), 0);
+  const ControlVector next = phi + delta;
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_LE(std::abs(next[i]), 0.3 + 1e-15) << i;
+  }
+  EXPECT_LT(target.DistanceRad(chain.Output(next, problem.s_in)), before);
+}
+
+TEST(GradientProjectionRangeTest, RejectsBadDampingSettings) {
+  GradientProjectionOptions options;
+  options.max_damping = -1.0;
+  EXPECT_THROW(GradientProjectionLaw(0.1, 0.1, options), std::invalid_argument);
+  options.max_damping = 0.5;
+  options.damping_threshold = 0.0;
+  EXPECT_THROW(GradientProjectionLaw(0.1, 0.1, options), std::invalid_argument);
+  options.damping_threshold = std::nan("");
+  EXPECT_THROW(GradientProjectionLaw(0.1, 0.1, options), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace dpc
+
+namespace dpc {
+namespace {
+
+class GradientProjectionCurvatureTest : public ::testing::Test, public testing::ControlFixture {
+ protected:
+  GradientProjectionCurvatureTest() : ControlFixture("3131") {}
+};
+
+TEST_F(GradientProjectionCurvatureTest, CorrectionLeavesTheLinearModelsPromiseToSecondOrder) {
+  // With step 1 the linear model promises e(φ + Δφ) = 0 (no null-space term); the chain's
+  // curvature leaves O(|Δφ|²); the correction removes most of it.
+  GradientProjectionOptions options;
+  options.curvature_correction = true;
+  GradientProjectionLaw plain(1.0, 0.0), corrected(1.0, 0.0, options);
+  double plain_sum = 0.0, corrected_sum = 0.0;
+  for (int trial = 0; trial < 20; ++trial) {
+    const ControlVector phi = RandomPhi(0.7);
+    const StokesVector s_in = RandomSop();
+    // A target 0.05 rad away from the current output.
+    const StokesVector here = chain().Output(phi, s_in);
+    const Vector3 away = here.cross(RandomSop()).normalized();
+    const Target near = Target::Point(RotationAboutAxis(away, 0.05) * here);
+    ControlProblem& p = Build(phi, s_in, near);
+    ControlVector plain_delta, corrected_delta;
+    ASSERT_TRUE(IsUsable(plain.ComputeUpdate(p, &plain_delta)));
+    ASSERT_TRUE(IsUsable(corrected.ComputeUpdate(p, &corrected_delta)));
+    if (plain.diagnostics().singular_values.min() < 0.5) continue;
+    const double plain_error = near.DistanceRad(chain().Output(phi + plain_delta, s_in));
+    const double corrected_error = near.DistanceRad(chain().Output(phi + corrected_delta, s_in));
+    // The correction uses J at φ, not at φ + Δφ: what remains is O(|Δφ|·r).
+    EXPECT_LT(corrected_error, 0.25 * plain_error) << trial;
+    plain_sum += plain_error;
+    corrected_sum += corrected_error;
+  }
+  EXPECT_LT(corrected_sum, 0.1 * plain_sum);
+}
+
+}  // namespace
+}  // namespace dpc

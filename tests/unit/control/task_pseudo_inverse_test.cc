@@ -119,3 +119,95 @@ TEST_F(TaskPseudoInverseTest, NullSpaceProjectionIsAnIdempotentProjectorOntoNull
 
 }  // namespace
 }  // namespace dpc
+
+namespace dpc {
+namespace {
+
+// Reference: A_λ⁺ = Σ σ_i/(σ_i² + λ²) v_i u_iᵀ and I − A_λ⁺A from an SVD.
+void ExpectMatchesDampedSvd(const TaskJacobian& a, double max_damping, double threshold,
+                            double tolerance) {
+  TaskPseudoInverse pinv;
+  pinv.ComputeDamped(a, max_damping, threshold);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(a),
+                                        Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::VectorXd s = svd.singularValues();
+  const double sigma_min = s[s.size() - 1];
+  const double lambda_squared =
+      sigma_min < threshold
+          ? max_damping * max_damping * (1.0 - sigma_min * sigma_min / (threshold * threshold))
+          : 0.0;
+  EXPECT_NEAR(pinv.damping_squared(), lambda_squared, 1e-12);
+  Eigen::MatrixXd reference = Eigen::MatrixXd::Zero(a.cols(), a.rows());
+  for (int i = 0; i < s.size(); ++i) {
+    const double denominator = s[i] * s[i] + lambda_squared;
+    if (denominator > 0.0) {
+      reference += (s[i] / denominator) * svd.matrixV().col(i) * svd.matrixU().col(i).transpose();
+    }
+  }
+  TaskVector e(a.rows());
+  for (int i = 0; i < e.size(); ++i) e[i] = 0.3 + i;
+  ControlVector x;
+  pinv.Solve(e, &x);
+  const Eigen::VectorXd expected = reference * Eigen::VectorXd(e);
+  EXPECT_LT((Eigen::VectorXd(x) - expected).norm(), tolerance * std::max(1.0, expected.norm()));
+  ControlVector v(a.cols()), projected;
+  for (int i = 0; i < v.size(); ++i) v[i] = 1.0 - 0.4 * i;
+  pinv.NullSpaceProjection(v, &projected);
+  const Eigen::MatrixXd p =
+      Eigen::MatrixXd::Identity(a.cols(), a.cols()) - reference * Eigen::MatrixXd(a);
+  EXPECT_LT((Eigen::VectorXd(projected) - p * Eigen::VectorXd(v)).norm(), tolerance);
+}
+
+TEST(TaskPseudoInverseDampingTest, AboveTheThresholdItIsTheUndampedInverse) {
+  TaskJacobian a(2, 4);
+  a << 1.0, 2.0, -0.5, 0.3,  //
+      -0.2, 0.4, 1.5, 0.9;
+  ExpectMatchesDampedSvd(a, 0.5, 0.1, 1e-12);
+  TaskPseudoInverse plain, damped;
+  plain.Compute(a);
+  damped.ComputeDamped(a, 0.5, 0.1);
+  EXPECT_EQ(damped.damping_squared(), 0.0);
+}
+
+TEST(TaskPseudoInverseDampingTest, MatchesTheDampedSvdNearAConstructedSingularity) {
+  // Rows nearly parallel: σ2 from 1e-1 down to 0 (both the normal-equation and Jacobi paths).
+  for (double gap : {1e-1, 1e-2, 1e-4, 1e-8, 0.0}) {
+    TaskJacobian a(2, 4);
+    a << 1.0, 2.0, -0.5, 0.3,  //
+        1.0, 2.0, -0.5, 0.3;
+    a(1, 3) += gap;
+    a(1, 0) -= 0.5 * gap;
+    ExpectMatchesDampedSvd(a, 0.5, 0.5, 1e-9);
+  }
+}
+
+TEST(TaskPseudoInverseDampingTest, OneRowTaskIsDampedBelowTheThreshold) {
+  TaskJacobian a(1, 3);
+  a << 0.1, -0.05, 0.02;
+  ExpectMatchesDampedSvd(a, 0.4, 0.5, 1e-12);
+  a << 1.0, -0.5, 0.2;
+  ExpectMatchesDampedSvd(a, 0.4, 0.5, 1e-12);
+}
+
+TEST(TaskPseudoInverseDampingTest, TheStepVanishesWithSigmaInsteadOfGrowing) {
+  // Undamped, the step along the vanishing direction is 1/σ2 per unit error. Damped with
+  // λ0 = ε, σ2² + λ² = ε² and the step is σ2/ε²: it goes to 0 with σ2.
+  TaskVector e(2);
+  e << 0.0, 1.0;
+  for (double gap : {1e-2, 1e-3, 1e-4, 1e-6}) {
+    TaskJacobian a(2, 3);
+    a << 1.0, 0.0, 0.0,  //
+        0.0, gap, 0.0;
+    TaskPseudoInverse pinv;
+    pinv.ComputeDamped(a, 0.5, 0.5);
+    ControlVector x;
+    pinv.Solve(e, &x);
+    EXPECT_NEAR(x.norm(), gap / 0.25, 1e-12);
+    pinv.Compute(a);
+    pinv.Solve(e, &x);
+    EXPECT_NEAR(x.norm(), 1.0 / gap, 1e-6 / gap);
+  }
+}
+
+}  // namespace
+}  // namespace dpc

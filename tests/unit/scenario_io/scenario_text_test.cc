@@ -132,7 +132,13 @@ stages {
 }
 input { disturbances { transient_burst { duration_s: 2e-5 random_axis: true } } }
 target { set { normal { s1: 0.1 s2: 0.2 s3: 1 } offset: 0.3 } }
-controller { method: RLS initial_phi: [ 0.1, 0.2, 0.3, 0.4 ] }
+controller {
+  method: GPT
+  initial_phi: [ 0.1, 0.2, 0.3, 0.4 ]
+  singularity_damping { max_damping: 0.4 threshold: 0.3 }
+  nullspace_criterion: RANGE
+  prediction { window_samples: 500 horizon_samples: 20 lead_samples: 4 }
+}
 )pb";
 
 ScenarioConfig FromText(const std::string& text) {

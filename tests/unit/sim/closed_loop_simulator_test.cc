@@ -7,6 +7,7 @@
 
 #include "dpc/config/scenario_error.h"
 #include "dpc/control/jacobian_laws.h"
+#include "dpc/optics/rotation.h"
 
 namespace dpc {
 namespace {
@@ -229,6 +230,100 @@ TEST_F(ClosedLoopSimulatorTest, AcceptsAUserSuppliedLaw) {
   EXPECT_GE(built, 1);
   EXPECT_TRUE(r.lock_time_s.has_value());
   EXPECT_EQ(r.nullspace_active_fraction, 0.0);  // pinv has no null-space term
+}
+
+}  // namespace
+}  // namespace dpc
+
+namespace dpc {
+namespace {
+
+// The part of the input no predictor can know: the angle between S_in at k and the input's
+// deterministic rotation of S_in at k − D (what an oracle knowing ω exactly predicts), averaged
+// over the samples from `from_s` on.
+class OracleFloor : public SimulationObserver {
+ public:
+  OracleFloor(double rad_per_sample, int delay, double from_s)
+      : step_(R3(rad_per_sample * delay)), delay_(delay), from_s_(from_s), ring_(delay) {}
+  void OnSample(const SampleView& s) override {
+    const size_t slot = static_cast<size_t>(count_ % delay_);
+    if (count_ >= delay_ && s.t_s >= from_s_) {
+      sum_ += SphereAngleRad(step_ * ring_[slot], s.s_in);
+      ++samples_;
+    }
+    ring_[slot] = s.s_in;
+    ++count_;
+  }
+  double mean_deg() const { return sum_ / static_cast<double>(samples_) * 180.0 / M_PI; }
+
+ private:
+  Matrix3 step_;
+  int64_t delay_;
+  double from_s_;
+  std::vector<StokesVector> ring_;
+  int64_t count_ = 0, samples_ = 0;
+  double sum_ = 0.0;
+};
+
+TEST_F(ClosedLoopSimulatorTest, PredictionReachesTheFloorOfTheScrambler) {
+  for (const char* axes : {"131", "3131"}) {
+    ScenarioConfig s = Paper(axes, 20e-3);  // 1e6 samples, D = 50
+    s.controller.prediction = PredictionConfig{};
+    ClosedLoopSimulator simulator(s);
+    EXPECT_FALSE(simulator.uses_fast_path());
+    OracleFloor floor(1e5 / 50e6, 50, 3e-3);
+    const SimulationResult with = simulator.Run(&floor, 1);
+    s.controller.prediction.reset();
+    const SimulationResult without = ClosedLoopSimulator(s).Run();
+    // The controller's error is the prediction error: within 15 % of the oracle's.
+    EXPECT_LT(with.summary.error_deg.mean, 1.15 * floor.mean_deg()) << axes;
+    EXPECT_GT(with.summary.error_deg.mean, 0.9 * floor.mean_deg()) << axes;
+    EXPECT_LT(with.summary.error_deg.mean, 0.25 * without.summary.error_deg.mean) << axes;
+  }
+}
+
+TEST_F(ClosedLoopSimulatorTest, DeterministicRotationIsTrackedExactlyWithPrediction) {
+  ScenarioConfig s = Paper("3131", 10e-3);
+  s.input.disturbances[0].kick_rms_ratio = 0.0;
+  s.input.disturbances[0].rate_rad_per_s = 1e6;
+  s.controller.prediction = PredictionConfig{};
+  s.controller.curvature_correction = true;
+  const SimulationResult r = ClosedLoopSimulator(s).Run();
+  EXPECT_LT(r.summary.error_deg.mean, 0.01);
+  s.controller.curvature_correction = false;  // the integrator then corrects the residual slowly
+  EXPECT_GT(ClosedLoopSimulator(s).Run().summary.error_deg.mean, 0.1);
+}
+
+TEST_F(ClosedLoopSimulatorTest, RangeCriterionKeepsEveryControlInsideItsRange) {
+  for (const char* axes : {"131", "3131"}) {
+    ScenarioConfig s = Paper(axes, 20e-3);
+    s.controller.prediction = PredictionConfig{};
+    const SimulationResult free = ClosedLoopSimulator(s).Run();
+    for (StageConfig& stage : s.stages) stage.range = ControlRange{-1.0, 1.0};
+    s.controller.nullspace_criterion = NullspaceCriterion::kRange;
+    const SimulationResult ranged = ClosedLoopSimulator(s).Run();
+    for (size_t i = 0; i < ranged.summary.phi_max.size(); ++i) {
+      EXPECT_LE(ranged.summary.phi_max[i], 1.0) << axes;
+      EXPECT_GE(ranged.summary.phi_min[i], -1.0) << axes;
+    }
+    EXPECT_EQ(ranged.summary.clamped_updates, 0) << axes;  // the law kept inside, not the clamp
+    EXPECT_LT(ranged.summary.error_deg.mean, 1.05 * free.summary.error_deg.mean) << axes;
+  }
+}
+
+TEST_F(ClosedLoopSimulatorTest, OneDimensionalTargetIsReached) {
+  ScenarioConfig s = Paper("131", 10e-3);
+  s.target.kind = TargetConfig::Kind::kSet;
+  s.target.normal = Vector3::UnitZ();  // s3 = 0: any linear polarization
+  s.target.offset = 0.0;
+  s.controller.prediction = PredictionConfig{};
+  s.controller.singularity_damping = SingularityDampingConfig{};
+  const SimulationResult r = ClosedLoopSimulator(s).Run();
+  EXPECT_TRUE(r.summary.lock_time_s.has_value());
+  EXPECT_LT(r.summary.error_deg.mean, 0.35);
+  for (size_t i = 0; i < r.summary.phi_max.size(); ++i) {
+    EXPECT_LE(std::max(r.summary.phi_max[i], -r.summary.phi_min[i]), 0.5);
+  }
 }
 
 }  // namespace

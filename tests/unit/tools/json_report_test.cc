@@ -21,7 +21,8 @@ const char* const kReadmeResultFields[] = {
 
 // The settings that identify a run (RunSettingsJson), including README's `loop_kernel`.
 const char* const kSettingsFields[] = {
-    "scenario", "stages", "controls", "method", "loop", "step", "nullspace_step", "target",
+    "scenario", "stages", "controls", "method", "loop", "step", "nullspace_step", "prediction",
+    "singularity_damping", "range_criterion", "curvature_correction", "target",
     "rate_rad_per_s", "sample_rate_hz", "delay_s", "delay_samples", "duration_s",
     "activation_s", "polarimeter_noise_deg", "seed", "loop_kernel"};
 

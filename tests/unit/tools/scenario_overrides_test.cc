@@ -122,7 +122,14 @@ TEST(ScenarioOverridesFlagForFieldTest, EachFlagNamesItsFieldOnly) {
       {{"--step", "0.2"}, "controller.step", "--step"},
       {{"--nullspace-step", "0.2"}, "controller.nullspace_step", "--nullspace-step"},
       {{"--threshold", "0.2"}, "controller.threshold", "--threshold"},
-      {{"--damping", "0.2"}, "controller.damping", "--damping"},
+      {{"--damping", "0.2"}, "controller.singularity_damping.max_damping", "--damping"},
+      {{"--damping-threshold", "0.2"}, "controller.singularity_damping.threshold",
+       "--damping-threshold"},
+      {{"--predict"}, "controller.prediction", "--predict"},
+      {{"--predict-window", "300"}, "controller.prediction.window_samples", "--predict-window"},
+      {{"--range", "1"}, "stages[1].range", "--range"},
+      {{"--target-set", "0,0,1"}, "target.set", "--target-set"},
+      {{"--target-point", "0,1,0"}, "target.point", "--target-point"},
       {{"--loop", "measured"}, "controller.loop", "--loop"},
       {{"--activation-s", "1e-4"}, "controller.activation_s", "--activation-s"},
       {{"--rate-rad-per-s", "7"}, "input.disturbances[0].paper_scrambler.rate_rad_per_s",
@@ -149,11 +156,65 @@ TEST(ScenarioOverridesFlagForFieldTest, EachFlagNamesItsFieldOnly) {
     overrides.Apply(&scenario);
     EXPECT_EQ(overrides.FlagForField(c.field_path), std::optional<std::string>(c.flag)) << c.flag;
     for (const FlagCase& other : cases) {
-      if (std::string(other.field_path) == c.field_path) continue;
+      // A field inside another (stages[1].range in stages) belongs to both flags' reach.
+      const std::string mine = c.field_path, theirs = other.field_path;
+      const auto inside = [](const std::string& inner, const std::string& outer) {
+        return inner == outer || inner.rfind(outer + ".", 0) == 0 ||
+               inner.rfind(outer + "[", 0) == 0;
+      };
+      if (inside(mine, theirs) || inside(theirs, mine)) continue;
       EXPECT_EQ(overrides.FlagForField(other.field_path), std::nullopt)
           << c.flag << " claims " << other.field_path;
     }
   }
+}
+
+TEST_F(ScenarioOverridesTest, DampingSetsLambdaForRls) {
+  EXPECT_EQ(ApplyAndGetErrorLocation({"--method", "rls", "--damping", "0.2"}), "");
+  EXPECT_EQ(scenario_.controller.damping, 0.2);
+  EXPECT_FALSE(scenario_.controller.singularity_damping.has_value());
+  EXPECT_EQ(overrides_.FlagForField("controller.damping"), "--damping");
+}
+
+TEST_F(ScenarioOverridesTest, DampingTurnsOnSingularityDampingForGradientProjection) {
+  EXPECT_EQ(ApplyAndGetErrorLocation(
+                {"--method", "gpt", "--damping", "0.3", "--damping-threshold", "0.7"}),
+            "");
+  ASSERT_TRUE(scenario_.controller.singularity_damping.has_value());
+  EXPECT_EQ(scenario_.controller.singularity_damping->max_damping, 0.3);
+  EXPECT_EQ(scenario_.controller.singularity_damping->threshold, 0.7);
+  EXPECT_EQ(scenario_.controller.damping, 1e-3);
+}
+
+TEST_F(ScenarioOverridesTest, RangePredictAndTargetSet) {
+  EXPECT_EQ(ApplyAndGetErrorLocation({"--range", "1", "--predict", "--target-set", "0,0,1"}), "");
+  for (const StageConfig& stage : scenario_.stages) {
+    ASSERT_TRUE(stage.range.has_value());
+    EXPECT_EQ(stage.range->min, -1.0);
+    EXPECT_EQ(stage.range->max, 1.0);
+  }
+  EXPECT_EQ(scenario_.controller.nullspace_criterion, NullspaceCriterion::kRange);
+  ASSERT_TRUE(scenario_.controller.prediction.has_value());
+  EXPECT_EQ(scenario_.controller.prediction->window_samples, 1000.0);
+  EXPECT_EQ(scenario_.target.kind, TargetConfig::Kind::kSet);
+  EXPECT_EQ(scenario_.target.normal, Vector3::UnitZ());
+  EXPECT_EQ(scenario_.target.offset, 0.0);
+}
+
+TEST_F(ScenarioOverridesTest, PredictContradictsNoPredict) {
+  EXPECT_EQ(ApplyAndGetErrorLocation({"--predict", "--no-predict"}), "--predict");
+}
+
+TEST_F(ScenarioOverridesTest, TargetLinearIsTheSetS3EqualsZero) {
+  EXPECT_EQ(ApplyAndGetErrorLocation({"--target-linear"}), "");
+  EXPECT_EQ(scenario_.target.kind, TargetConfig::Kind::kSet);
+  EXPECT_EQ(scenario_.target.normal, Vector3::UnitZ());
+  EXPECT_EQ(scenario_.target.offset, 0.0);
+}
+
+TEST_F(ScenarioOverridesTest, OneTargetOnly) {
+  EXPECT_EQ(ApplyAndGetErrorLocation({"--target-set", "0,0,1", "--target-point", "0,1,0"}),
+            "--target-point");
 }
 
 TEST_F(ScenarioOverridesTest, FlagForFieldCoversPathsInsideTheField) {

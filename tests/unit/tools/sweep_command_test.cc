@@ -174,6 +174,36 @@ TEST_F(SweepCommandTest, CsvHoldsTheTable) {
   EXPECT_EQ(lines[2].rfind("scenario,gp,10000,1,", 0), 0u) << lines[2];
 }
 
+TEST_F(SweepCommandTest, PredictionsCompareWithAndWithoutDelayCompensation) {
+  const std::string csv = PathIn("sweep.csv");
+  const std::string png = PathIn("sweep.png");
+  ASSERT_EQ(Run({"--rates", "1e5", "--predictions", "off,on", "--csv", csv, "--plot", png,
+                 "--reference-deg", "1.15", "--duration-s", "4e-3"}),
+            kExitOk)
+      << err_;
+  std::ifstream in(csv);
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::vector<std::string> lines = Lines(text.str());
+  ASSERT_EQ(lines.size(), 3u) << text.str();
+  EXPECT_NE(lines[0].find(",prediction"), std::string::npos);
+  ASSERT_EQ(lines[1].substr(lines[1].size() - 4), ",off");
+  ASSERT_EQ(lines[2].substr(lines[2].size() - 3), ",on");
+  // error_deg_mean is the fifth column: prediction cuts it several-fold at 100 krad/s.
+  const auto mean_of = [](const std::string& line) {
+    std::stringstream fields(line);
+    std::string field;
+    for (int i = 0; i < 5; ++i) std::getline(fields, field, ',');
+    return std::stod(field);
+  };
+  EXPECT_LT(mean_of(lines[2]), 0.3 * mean_of(lines[1]));
+  EXPECT_TRUE(fs::exists(png));
+}
+
+TEST_F(SweepCommandTest, PredictionsRefuseOtherValues) {
+  EXPECT_THROW(Parse({"--predictions", "maybe"}), CLI::ValidationError);
+}
+
 TEST_F(SweepCommandTest, PlotWritesAPng) {
   const std::string png = PathIn("sweep.png");
   ASSERT_EQ(Run({"--methods", "gp", "--rates", "1e3,1e4", "--plot", png}), kExitOk) << err_;
