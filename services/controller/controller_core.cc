@@ -148,7 +148,8 @@ double ControllerCore::PredictionHorizonS(const msg::StokesSample& sample) {
   }
   // Before the first measurement (or while another controller is obeyed): the last estimate,
   // else one sample period.
-  return latency_estimate_s_ >= 0.0 ? latency_estimate_s_ : period_s;
+  // Whole microseconds: the compensator re-solves its cached fit when the horizon changes.
+  return latency_estimate_s_ >= 0.0 ? std::round(latency_estimate_s_ * 1e6) * 1e-6 : period_s;
 }
 
 void ControllerCore::RejectSample(std::string reason) {
