@@ -43,6 +43,13 @@ std::string ControllerCore::OnDevice(const msg::DeviceDescription& description) 
     problem_.chain = chain_.get();
     problem_.loop_mode = settings_.controller.loop;
     problem_.need_jacobian = law_->needs_jacobian();
+    compensator_.reset();
+    if (const auto& prediction = settings_.controller.prediction) {
+      compensator_.emplace(prediction->window_samples,
+                           prediction->lead_samples.value_or(IntegratorLagSamples(settings_.controller.step)),
+                           1.0 / settings_.simulation.sample_rate_hz);
+    }
+    latency_estimate_s_ = -1.0;
     condition_ = target_ ? "waiting for the driver's state" : "waiting for the target";
     return {};
   } catch (const std::exception& e) {
@@ -104,6 +111,7 @@ void ControllerCore::OnState(const msg::WaveplateState& state) {
     return;
   }
   if (obeyed_) {
+    state_answers_sample_ = state.answers_sample();
     if (state.answers_sample() == last_answered_sample_) {
       for (bool limited : state.saturated()) {
         if (limited) {
@@ -122,6 +130,26 @@ void ControllerCore::OnState(const msg::WaveplateState& state) {
   const bool stale_heartbeat = state.mode() == msg::DRIVER_HOLDING && lockstep_ &&
                                state.answers_sample() < last_answered_sample_;
   if (!stale_heartbeat) Resync(applied_phi_);
+}
+
+double ControllerCore::PredictionHorizonS(const msg::StokesSample& sample) {
+  const PredictionConfig& prediction = *settings_.controller.prediction;
+  const double period_s = 1.0 / settings_.simulation.sample_rate_hz;
+  if (prediction.horizon_samples) return *prediction.horizon_samples * period_s;
+  if (sample.lockstep()) return settings_.simulation.delay_s;  // the simulated bench's own delay
+  const auto& [sequence, time_ns] = sample_times_ns_[state_answers_sample_ % kSampleTimeRing];
+  if (obeyed_ && state_answers_sample_ != 0 && sequence == state_answers_sample_) {
+    const double latency_s = static_cast<double>(sample.sample_time_ns() - time_ns) * 1e-9;
+    if (latency_s >= 0.0 && latency_s < 0.5) {
+      latency_estimate_s_ = latency_estimate_s_ < 0.0
+                                ? latency_s
+                                : latency_estimate_s_ + (latency_s - latency_estimate_s_) / 64.0;
+    }
+  }
+  // Before the first measurement (or while another controller is obeyed): the last estimate,
+  // else one sample period.
+  // Whole microseconds: the compensator re-solves its cached fit when the horizon changes.
+  return latency_estimate_s_ >= 0.0 ? std::round(latency_estimate_s_ * 1e6) * 1e-6 : period_s;
 }
 
 void ControllerCore::RejectSample(std::string reason) {
@@ -150,6 +178,7 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
   if (last_sample_ns_ != 0 &&
       now_ns - last_sample_ns_ > static_cast<int64_t>(settings_.freeze_after_s * 1e9)) {
     Resync(applied_phi_);  // samples resume after a gap: re-join from what is applied
+    if (compensator_) compensator_->Reset();  // the input's history is stale
   }
   last_sample_ = sample.sequence_number();
   last_sample_ns_ = now_ns;
@@ -162,9 +191,20 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
   }
   chain_->ComputePose(integrator_->phi(), &pose_);
   problem_.pose = &pose_;
-  problem_.s_in = bus::ToStokes(sample.s_in());
+  sample_times_ns_[sample.sequence_number() % kSampleTimeRing] = {sample.sequence_number(),
+                                                                  sample.sample_time_ns()};
+  if (compensator_) {
+    horizon_s_ = PredictionHorizonS(sample);
+    if (compensator_->predictor().samples() == 0) time_origin_ns_ = sample.sample_time_ns();
+    problem_.s_in = compensator_->PredictAt(
+        bus::ToStokes(sample.s_in()), static_cast<double>(sample.sample_time_ns() - time_origin_ns_) * 1e-9,
+        horizon_s_);
+  } else {
+    problem_.s_in = bus::ToStokes(sample.s_in());
+  }
   problem_.s_out_measured = bus::ToStokes(sample.s_out());
   UpdateControlProblem(&problem_);
+  if (compensator_) compensator_->AddLead(&problem_);
   const ControlStatus status = law_->ComputeUpdate(problem_, &delta_phi_);
   const ControlIntegrator::Outcome outcome = integrator_->Apply(status, delta_phi_);
   const double compute_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -213,13 +253,18 @@ msg::ControllerStatus ControllerCore::TakeStatus(int64_t now_ns, int64_t wall_ns
   } else if (configured() && last_sample_ns_ == 0) {
     condition_ = "waiting for samples";
   }
+  std::string condition = condition_;
+  if (compensator_ && configured()) {
+    condition += fmt::format(" (predicting {:.3f} ms ahead, input at {:.0f} rad/s)", horizon_s_ * 1e3,
+                             compensator_->predictor().RateRadPerS());
+  }
   msg::ControllerStatus status;
   status.bench_id(settings_.bench_id);
   status.controller_id(settings_.controller_id);
   status.priority(settings_.priority);
   status.law(law_name_);
   status.obeyed(obeyed_);
-  status.condition(condition_.substr(0, 127));
+  status.condition(condition.substr(0, 127));
   status.answers_sample(last_answered_sample_);
   status.error_deg(error_deg_);
   status.sigma_max(sigma_max_);

@@ -14,10 +14,21 @@
 // integrates its own commands (paper eq. 6), as `dpc sim` does; if the driver reports that it
 // limited this controller's latest command, the integrator takes the applied φ (no wind-up).
 //
+// Delay compensation (scenario controller.prediction, flag --predict; delay_compensator.h):
+// the law aims at the input SOP predicted for the moment its command acts. In real time that
+// horizon is measured, not configured: when sample j arrives, the latest state this controller
+// has seen answers sample a (the command the polarimeter applied when it measured j, within a
+// state's transit), so a command computed now acts ≈ t_j − t_a later (sample timestamps). The
+// horizon is that latency, smoothed over ~64 samples; a configured horizon_samples (in periods
+// of the scenario's sample_rate_hz) replaces it, and so does the lockstep bench's own delay.
+// Samples are observed at their timestamps (InputPredictor::ObserveAt), so a real-time
+// polarimeter's jitter does not bias the fitted rotation.
+//
 // When samples stop, nothing is integrated (the controller only acts on samples): the
 // integrator is frozen, the status says "frozen", and after a gap longer than freeze_after_s the
 // controller re-joins from the applied φ when samples resume.
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -28,6 +39,7 @@
 #include "dpc/control/control_law.h"
 #include "dpc/control/control_law_factory.h"
 #include "dpc/control/control_problem.h"
+#include "dpc/control/delay_compensator.h"
 #include "dpc/control/target.h"
 #include "dpc/msg/bench.h"
 #include "dpc/optics/waveplate_chain.h"
@@ -69,10 +81,16 @@ class ControllerCore {
   uint64_t rejected_samples() const { return rejected_samples_; }
   const std::string& last_rejection() const { return last_rejection_; }
   const std::string& condition() const { return condition_; }
+  /// Delay compensation: on, and the horizon (seconds) the latest update predicted across.
+  bool predicting() const { return compensator_.has_value(); }
+  double prediction_horizon_s() const { return horizon_s_; }
 
  private:
   void Resync(const ControlVector& phi);
   void RejectSample(std::string reason);
+  /// Real-time. The horizon for the sample at t_ns: the measured loop latency (see the file
+  /// comment), or the configured one.
+  double PredictionHorizonS(const msg::StokesSample& sample);
 
   ControllerSettings settings_;
   std::unique_ptr<WaveplateChain> chain_;
@@ -97,6 +115,14 @@ class ControllerCore {
   uint64_t sequence_ = 0;
   uint64_t target_revision_ = 0;
 
+  // Delay compensation (unset: off).
+  std::optional<DelayCompensator> compensator_;
+  double horizon_s_ = 0.0;                ///< the latest horizon used
+  double latency_estimate_s_ = -1.0;      ///< smoothed t_j − t_a; < 0: none yet
+  uint64_t state_answers_sample_ = 0;     ///< of the latest state obeying this controller
+  int64_t time_origin_ns_ = 0;            ///< the predictor's t = 0 (keeps double seconds exact)
+  static constexpr size_t kSampleTimeRing = 4096;  ///< recent samples' times, by sequence number
+  std::array<std::pair<uint64_t, int64_t>, kSampleTimeRing> sample_times_ns_{};
   // Status.
   std::string condition_ = "waiting for the device description";
   double error_deg_ = NAN;

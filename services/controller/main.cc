@@ -47,12 +47,6 @@ int Run(int argc, char** argv) {
   SetUpLogging("controller " + settings.controller_id, common);
   try {
     const ScenarioConfig scenario = LoadServiceScenario(common);
-    if (scenario.controller.prediction) {
-      // The core's DelayCompensator has the time-based API (PredictAt); wiring it to the
-      // measured loop latency here is issue 5, item 5.
-      throw ScenarioError("controller.prediction",
-                          "delay compensation is not in dpc-controller yet; it runs in dpc sim");
-    }
     settings.controller = scenario.controller;
     settings.simulation = scenario.simulation;
   } catch (const ScenarioError& e) {
