@@ -25,6 +25,17 @@ own_address() {
   echo "$address"
 }
 
+# client_profile OPTION VARIABLE DESCRIPTION: this container's profile from make_profile.sh
+# --address <own address> OPTION "${!VARIABLE}", used by every participant the command starts.
+client_profile() {
+  local address
+  address=$(own_address)
+  "$fastdds_dir/make_profile.sh" --address "$address" "$1" "${!2}" >"$profile" ||
+    fail "bad $2=${!2} or DPC_DDS_ADDRESS=$address"
+  export FASTRTPS_DEFAULT_PROFILES_FILE="$profile"
+  echo "dpc-entrypoint: UDPv4 on $address, $3" >&2
+}
+
 if [[ -n "${FASTRTPS_DEFAULT_PROFILES_FILE:-}" ]]; then
   [[ -r "$FASTRTPS_DEFAULT_PROFILES_FILE" ]] ||
     fail "FASTRTPS_DEFAULT_PROFILES_FILE=$FASTRTPS_DEFAULT_PROFILES_FILE is not readable"
@@ -35,17 +46,9 @@ elif [[ -n "${DPC_DDS_DISCOVERY_SERVER:-}" ]]; then
   [[ $# -gt 0 && "$1" != "dpc" ]] || set -- fast-discovery-server
   exec "$@" -x "$profile"
 elif [[ -n "${DPC_DDS_SERVER:-}" ]]; then
-  address=$(own_address)
-  "$fastdds_dir/make_profile.sh" --address "$address" --server "$DPC_DDS_SERVER" >"$profile" ||
-    fail "bad DPC_DDS_SERVER=$DPC_DDS_SERVER or DPC_DDS_ADDRESS=$address"
-  export FASTRTPS_DEFAULT_PROFILES_FILE="$profile"
-  echo "dpc-entrypoint: UDPv4 on $address, client of the discovery server $DPC_DDS_SERVER" >&2
+  client_profile --server DPC_DDS_SERVER "client of the discovery server $DPC_DDS_SERVER"
 elif [[ -n "${DPC_DDS_PEERS:-}" ]]; then
-  address=$(own_address)
-  "$fastdds_dir/make_profile.sh" --address "$address" --peers "$DPC_DDS_PEERS" >"$profile" ||
-    fail "bad DPC_DDS_PEERS=$DPC_DDS_PEERS or DPC_DDS_ADDRESS=$address"
-  export FASTRTPS_DEFAULT_PROFILES_FILE="$profile"
-  echo "dpc-entrypoint: UDPv4 on $address, peers $DPC_DDS_PEERS" >&2
+  client_profile --peers DPC_DDS_PEERS "peers $DPC_DDS_PEERS"
 fi
 
 [[ $# -gt 0 ]] || set -- dpc --help

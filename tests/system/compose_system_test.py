@@ -372,7 +372,8 @@ def failover_and_hold(args, base, work):
         expect(figures["failover_gap_ms"] < 100, f"failover within 100 ms ({figures['failover_gap_ms']:.2f} ms)")
         expect(figures["error_after_kill_max_deg"] < max(5.0, 2 * figures["error_before_kill_max_deg"]),
                "the output stayed locked across the failover")
-        expect(bench.locked_since(time.monotonic() - 1.0, window_s=0.5) is not None, "locked under the standby")
+        bench.wait(lambda: bench.locked_since(killed, window_s=0.5) is not None, 10, "the output to lock under the standby")
+        log("ok: locked under the standby")
 
         # --- network disconnect of the solver → hold; reconnect → resume without a jump --------------
         standby = project.container("controller-standby")
@@ -407,7 +408,9 @@ def failover_and_hold(args, base, work):
             f"error {at_resume:.2f}° while holding, at most {after_resume:.2f}° after")
         expect(step < 0.15, f"the first command after the hold continues from the held φ (step {step:.4f})")
         expect(after_resume <= at_resume + 2.0, "no error spike after resuming (no bump at the output)")
-        expect(bench.locked_since(time.monotonic() - 1.0, window_s=0.5) is not None, "locked again")
+        bench.wait(lambda: bench.locked_since(reconnect, window_s=0.5) is not None, 10, "the output to lock again")
+        figures["relock_after_reconnect_s"] = bench.locked_since(reconnect, window_s=0.5) - 0.5 - reconnect
+        log(f"ok: locked again (a 0.5 s window within 2° began {figures['relock_after_reconnect_s']:.2f} s after the reconnect)")
 
         # --- SIGTERM: every service ends by itself, cleanly --------------------------------------
         containers = project("ps", "-q").stdout.split()

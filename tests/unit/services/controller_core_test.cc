@@ -36,19 +36,21 @@ msg::WaveplateState State(std::vector<double> phi, const std::string& obeyed, ui
   return s;
 }
 
+/// Controller "me": gradient projection, step 0.5, a 10 kHz bench.
+ControllerSettings Settings() {
+  ControllerSettings settings;
+  settings.controller_id = "me";
+  settings.controller.step = 0.5;
+  settings.simulation.sample_rate_hz = 10e3;
+  settings.simulation.delay_s = 1e-4;
+  settings.simulation.duration_s = 1.0;
+  settings.controller.dither.reset_duration_s = 1e-4;
+  return settings;
+}
+
 class ControllerCoreTest : public ::testing::Test {
  protected:
   ControllerCoreTest() : core_(Settings()) {}
-  static ControllerSettings Settings() {
-    ControllerSettings settings;
-    settings.controller_id = "me";
-    settings.controller.step = 0.5;
-    settings.simulation.sample_rate_hz = 10e3;
-    settings.simulation.delay_s = 1e-4;
-    settings.simulation.duration_s = 1.0;
-    settings.controller.dither.reset_duration_s = 1e-4;
-    return settings;
-  }
   void Configure() {
     ASSERT_EQ(core_.OnDevice(bus::DescribeDevice(StagesFromAxes("131"), "bench1", "driver", 0.0)), "");
     ASSERT_EQ(core_.OnTarget(bus::TargetMessage(TargetConfig{}, "bench1", 1, "")), "");
@@ -152,13 +154,7 @@ struct RealTimeLoopResult {
 };
 
 RealTimeLoopResult RunRealTimeLoop(bool predict, int delay_samples) {
-  ControllerSettings settings;
-  settings.controller_id = "me";
-  settings.controller.step = 0.5;
-  settings.simulation.sample_rate_hz = 10e3;
-  settings.simulation.delay_s = 1e-4;
-  settings.simulation.duration_s = 1.0;
-  settings.controller.dither.reset_duration_s = 1e-4;
+  ControllerSettings settings = Settings();
   if (predict) settings.controller.prediction = PredictionConfig{};
   ControllerCore core(settings);
   const auto stages = StagesFromAxes("131");
