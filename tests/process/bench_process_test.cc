@@ -308,7 +308,13 @@ TEST_F(BenchProcessTest, KillNineOfTheObeyedControllerHandsControlToTheStandby) 
   const double after_deg = MaxErrorDeg(first_standby_ns, first_standby_ns + 100'000'000);
   std::printf("largest output error: %.2f° in the 200 ms before the kill, %.2f° in the 100 ms after the switch\n",
               before_deg, after_deg);
-  EXPECT_LT(after_deg, std::max(5.0, 2.0 * before_deg));
+  // While nobody commands (the gap, and any stall of the machine right after the kill), the
+  // driver holds φ and the input keeps turning at the scrambler's rate (20 rad/s in the embedded
+  // bench_default.pbtxt): that drift is the hold's, not a bump of the standby. Seen in CI: a
+  // 2.2-ms gap followed by a 6.9° peak (1.9° before), with a φ step of 0.003 at the switch.
+  constexpr double kScramblerRateRadPerS = 20.0;
+  const double hold_drift_deg = kScramblerRateRadPerS * gap_ms * 1e-3 * 180.0 / M_PI;
+  EXPECT_LT(after_deg, std::max(5.0, 2.0 * before_deg) + hold_drift_deg) << "hold drift " << hold_drift_deg << "°";
   EXPECT_TRUE(Obeys("standby"));
 }
 
