@@ -147,8 +147,8 @@ double ControllerCore::PredictionHorizonS(const msg::StokesSample& sample) {
     }
   }
   // Before the first measurement (or while another controller is obeyed): the last estimate,
-  // else one sample period.
-  // Whole microseconds: the compensator re-solves its cached fit when the horizon changes.
+  // else one sample period. Whole microseconds: the compensator re-solves its cached fit when
+  // the horizon changes.
   return latency_estimate_s_ >= 0.0 ? std::round(latency_estimate_s_ * 1e6) * 1e-6 : period_s;
 }
 
@@ -191,9 +191,9 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
   }
   chain_->ComputePose(integrator_->phi(), &pose_);
   problem_.pose = &pose_;
-  sample_times_ns_[sample.sequence_number() % kSampleTimeRing] = {sample.sequence_number(),
-                                                                  sample.sample_time_ns()};
   if (compensator_) {
+    sample_times_ns_[sample.sequence_number() % kSampleTimeRing] = {sample.sequence_number(),
+                                                                    sample.sample_time_ns()};
     horizon_s_ = PredictionHorizonS(sample);
     if (compensator_->predictor().samples() == 0) time_origin_ns_ = sample.sample_time_ns();
     problem_.s_in = compensator_->PredictAt(
