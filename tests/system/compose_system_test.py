@@ -326,6 +326,8 @@ def failover_and_hold(args, base, work):
         bench.wait(lambda: bench.locked_since(up_started) is not None, 90, "the output to lock")
         figures["up_to_locked_s"] = bench.locked_since(up_started) - up_started
         log(f"locked {figures['up_to_locked_s']:.2f} s after `up` (the command took {figures['up_command_s']:.2f} s)")
+        # The lock is judged from the samples; the states arrive on their own topic.
+        bench.wait(lambda: bench.latest_state() is not None, 20, "the driver's state")
         state = bench.latest_state()
         expect(state["mode"] == "DRIVER_ACTIVE" and state["obeyed_controller_id"] == "main",
                f"the driver obeys the main controller ({state['reason']})")
@@ -457,6 +459,7 @@ def split_deployment(args, base, work):
         solver_project("up", "-d", timeout=300)
         bench.wait(lambda: bench.locked_since(up_started) is not None, 90, "the solver to lock the output")
         figures["split_up_to_locked_s"] = bench.locked_since(up_started) - up_started
+        bench.wait(lambda: bench.latest_state() is not None, 20, "the driver's state")
         state = bench.latest_state()
         expect(state["obeyed_controller_id"] == "remote",
                f"the bench obeys the solver's controller, locked {figures['split_up_to_locked_s']:.2f} s after its `up`")
