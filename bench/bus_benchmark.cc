@@ -17,8 +17,10 @@
 //   failover kill -9 of the obeyed controller with a standby: gap between the last command of
 //            the killed one and the first of the standby applied by the driver; the raw DDS
 //            reference: kill -9 of the stronger of two EXCLUSIVE-ownership writers
-//   tracking real time at 10 kHz, the scrambler at increasing rates: mean error, without and
-//            with the controller's delay compensation (--predict)
+//   tracking real time at 10 kHz, the scrambler (kicks per bench sample, and the paper's own
+//            diffusion) and a deterministic rotation at increasing
+//            rates: mean error without prediction, predicting across the latency, and with
+//            rate commands (--predict); the rate at which each crosses 1°
 //   memory   RSS of each service at the start and the end of a long 10 kHz run
 
 #include <signal.h>
@@ -487,18 +489,41 @@ void Failover(int repetitions, const std::string& self) {
   if (!raw.empty()) fmt::print("  raw median {:.2f} ms, worst {:.2f} ms\n", raw[raw.size() / 2], raw.back());
 }
 
+// The rate at which the mean error crosses 1°, interpolated linearly between the measured
+// rates that bracket it (0 if even the first is above, the last rate if none is).
+double OneDegreeCrossing(const std::vector<double>& rates, const std::vector<double>& errors_deg) {
+  if (errors_deg.empty() || !(errors_deg[0] < 1.0)) return 0.0;
+  for (size_t i = 1; i < errors_deg.size(); ++i) {
+    if (!(errors_deg[i] < 1.0)) {
+      if (!std::isfinite(errors_deg[i])) return rates[i - 1];
+      const double f = (1.0 - errors_deg[i - 1]) / (errors_deg[i] - errors_deg[i - 1]);
+      return rates[i - 1] + f * (rates[i] - rates[i - 1]);
+    }
+  }
+  return rates[errors_deg.size() - 1];
+}
+
 // One table: the polarimeter on `scenario` (empty: the embedded default, the paper scrambler at
-// 10 kHz), each rate without and with --predict.
+// 10 kHz), each rate without prediction, with --predict-mode latency and with --predict (ramp).
 void TrackingTable(double seconds, const std::string& scenario, const std::vector<double>& rates, bool kicks) {
-  double best[2] = {0.0, 0.0};
-  bool lost[2] = {false, false};
+  constexpr int kModes = 3;
+  const char* names[kModes] = {"none", "latency", "ramp"};
+  const std::vector<std::string> flags[kModes] = {
+      {}, {"--predict", "--predict-mode", "latency"}, {"--predict", "--predict-mode", "ramp"}};
+  std::vector<double> errors[kModes];
+  bool lost[kModes] = {false, false, false};
+  fmt::print("  {:>10}  {:>9} {:>9} {:>9}{}   (mean error, by prediction)\n", "rate", names[0], names[1],
+             names[2], kicks ? "  kick floor (D = 2)" : "");
   for (double rate : rates) {
-    double mean[2] = {NAN, NAN};
-    for (int predict = 0; predict < 2; ++predict) {
-      if (lost[predict]) continue;  // the error only grows with the rate
+    double mean[kModes] = {NAN, NAN, NAN};
+    for (int mode = 0; mode < kModes; ++mode) {
+      if (lost[mode]) {  // the error only grows with the rate
+        errors[mode].push_back(NAN);
+        continue;
+      }
       Services services;
       services.Driver();
-      services.Controller("A", 0, predict ? std::vector<std::string>{"--predict"} : std::vector<std::string>{});
+      services.Controller("A", 0, flags[mode]);
       std::this_thread::sleep_for(500ms);
       std::vector<std::string> args = {"--rate-hz", "10000", "--run-s", fmt::format("{}", seconds),
                                        "--rate-rad-per-s", fmt::format("{}", rate), "--json"};
@@ -506,28 +531,37 @@ void TrackingTable(double seconds, const std::string& scenario, const std::vecto
       ChildProcess& polarimeter = services.Polarimeter(args);
       polarimeter.Wait(std::chrono::seconds(static_cast<int64_t>(seconds * 3 + 60)));
       const nlohmann::json r = LastJsonLine(polarimeter.Log());
-      mean[predict] = r.is_object() && !r["error_deg"]["mean"].is_null() ? r["error_deg"]["mean"].get<double>() : NAN;
-      if (mean[predict] < 1.0) best[predict] = rate;
-      if (!(mean[predict] < 5.0)) lost[predict] = true;
+      mean[mode] = r.is_object() && !r["error_deg"]["mean"].is_null() ? r["error_deg"]["mean"].get<double>() : NAN;
+      errors[mode].push_back(mean[mode]);
+      if (!(mean[mode] < 5.0)) lost[mode] = true;
     }
+    fmt::print("  {:4.0f} rad/s  {:8.3f}° {:8.3f}° {:8.3f}°", rate, mean[0], mean[1], mean[2]);
     // What no predictor knows: the kicks over the loop delay, ≈ 0.63·σ·√D, σ = ω·dt (D = 2).
-    const double floor_deg = 0.63 * rate * 1e-4 * std::sqrt(2.0) * 180.0 / M_PI;
-    fmt::print("  {:6.0f} rad/s: mean error {:8.3f}° without, {:8.3f}° with prediction", rate, mean[0], mean[1]);
-    if (kicks) fmt::print("   (kick floor at D = 2: {:.2f}°)", floor_deg);
+    if (kicks) fmt::print("  {:17.2f}°", 0.63 * rate * 1e-4 * std::sqrt(2.0) * 180.0 / M_PI);
     fmt::print("\n");
+    std::fflush(stdout);
   }
-  fmt::print("  largest rate tracked below 1° mean: {:.0f} rad/s without, {:.0f} rad/s with prediction ({:.1f}×)\n",
-             best[0], best[1], best[0] > 0 ? best[1] / best[0] : NAN);
+  double crossing[kModes];
+  for (int mode = 0; mode < kModes; ++mode) crossing[mode] = OneDegreeCrossing(rates, errors[mode]);
+  fmt::print("  rate tracked below 1° mean (interpolated): {:.0f} rad/s without prediction, {:.0f} rad/s "
+             "predicting across the latency ({:.1f}×), {:.0f} rad/s with rate commands ({:.1f}×)\n",
+             crossing[0], crossing[1], crossing[0] > 0 ? crossing[1] / crossing[0] : NAN, crossing[2],
+             crossing[0] > 0 ? crossing[2] / crossing[0] : NAN);
 }
 
 void Tracking(double seconds) {
-  fmt::print("tracking in real time at 10 kHz (scrambler rate → mean error), without and with the\n"
-             "controller's delay compensation (--predict: across the measured loop latency)\n");
+  fmt::print("tracking in real time at 10 kHz (rotation rate → mean error), without prediction, with\n"
+             "the controller predicting across the measured latency (--predict-mode latency) and with\n"
+             "rate commands the driver ramps along (--predict, mode ramp)\n");
   fmt::print(" the paper scrambler (rotation about S3 + random S2 kicks of σ = ω·dt per sample):\n");
-  TrackingTable(seconds, "", {20.0, 50.0, 100.0, 150.0, 200.0, 300.0, 500.0, 1000.0}, true);
+  TrackingTable(seconds, "", {20.0, 30.0, 50.0, 75.0, 100.0, 150.0, 200.0, 300.0}, true);
+  fmt::print(" the paper scrambler's own diffusion (its 50-MHz kicks summed over a 100-µs sample:\n"
+             " deploy/scenarios/bench_paper_diffusion.pbtxt, kick_rms_ratio 0.0141):\n");
+  TrackingTable(seconds, std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/bench_paper_diffusion.pbtxt",
+                {20.0, 30.0, 50.0, 100.0, 200.0, 500.0, 700.0, 1000.0}, false);
   fmt::print(" a deterministic rotation (deploy/scenarios/bench_rotation.pbtxt: no kicks):\n");
   TrackingTable(seconds, std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/bench_rotation.pbtxt",
-                {50.0, 100.0, 200.0, 500.0, 1000.0, 2000.0, 5000.0}, false);
+                {20.0, 30.0, 50.0, 100.0, 200.0, 500.0, 700.0, 1000.0, 1500.0}, false);
 }
 
 double RssMb(pid_t pid) {

@@ -1,5 +1,6 @@
 #include "controller_core.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -12,6 +13,7 @@
 namespace dpc::services {
 namespace {
 constexpr double kRadToDeg = 180.0 / M_PI;
+constexpr int64_t kRateMinSamples = 16;  ///< samples the predictor needs before a rate is sent
 }
 
 ControllerCore::ControllerCore(ControllerSettings settings) : settings_(std::move(settings)) {
@@ -38,6 +40,16 @@ std::string ControllerCore::OnDevice(const msg::DeviceDescription& description) 
     law_ = std::move(law);
     integrator_ = std::make_unique<ControlIntegrator>(*chain_, ControlVector::Zero(controls));
     applied_phi_ = ControlVector::Zero(controls);
+    applied_motion_.phi = ControlVector::Zero(controls);
+    applied_motion_.rate_per_s = ControlVector::Zero(controls);
+    applied_motion_.moving = false;
+    rate_ = ControlVector::Zero(controls);
+    step_ = ControlVector::Zero(controls);
+    rate_time_ns_ = 0;
+    ramp_ = false;
+    device_max_ramp_s_ = description.max_ramp_s() > 0.0 && std::isfinite(description.max_ramp_s())
+                             ? description.max_ramp_s()
+                             : 0.0;
     have_state_ = false;
     activated_ = false;
     problem_.chain = chain_.get();
@@ -89,19 +101,12 @@ void ControllerCore::Resync(const ControlVector& phi) {
 
 void ControllerCore::OnState(const msg::WaveplateState& state) {
   if (!chain_) return;
-  const size_t controls = static_cast<size_t>(chain_->control_count());
-  if (state.phi_applied().size() != controls) {
-    RejectSample(fmt::format("state: phi_applied has {} values, the device has {} controls",
-                             state.phi_applied().size(), controls));
+  if (std::string reason = bus::CheckStateShape(state, chain_->control_count()); !reason.empty()) {
+    RejectSample("state: " + reason);
     return;
   }
-  for (double v : state.phi_applied()) {
-    if (!std::isfinite(v)) {
-      RejectSample(fmt::format("state: phi_applied has a non-finite value {}", v));
-      return;
-    }
-  }
-  for (size_t i = 0; i < controls; ++i) applied_phi_[static_cast<int>(i)] = state.phi_applied()[i];
+  bus::ReadTrajectory(state, &applied_motion_);
+  applied_motion_.At(last_sample_time_ns_, &applied_phi_);
   const bool first = !have_state_;
   have_state_ = true;
   obeyed_ = state.mode() == msg::DRIVER_ACTIVE &&
@@ -152,6 +157,52 @@ double ControllerCore::PredictionHorizonS(const msg::StokesSample& sample) {
   return latency_estimate_s_ >= 0.0 ? std::round(latency_estimate_s_ * 1e6) * 1e-6 : period_s;
 }
 
+void ControllerCore::SolveRate(const ControlProblem& problem, const Vector3& omega, ControlVector* rate) {
+  // ω × S_in: how the input moves (rad/s, input frame); the task must not see it.
+  const Vector3 motion = omega.cross(problem.s_in);
+  TaskVector velocity(problem.task_jacobian.rows());
+  if (target_->is_point()) {
+    velocity[0] = -problem.tangent_e1.dot(motion);
+    velocity[1] = -problem.tangent_e2.dot(motion);
+  } else {
+    const Vector3 normal_in = problem.kinematics.mueller.transpose() * target_->normal();
+    velocity[0] = -normal_in.dot(motion);
+  }
+  const SingularityDampingConfig damping =
+      settings_.controller.singularity_damping.value_or(SingularityDampingConfig{});
+  rate_solver_.ComputeDamped(problem.task_jacobian, damping.max_damping, damping.threshold);
+  rate_solver_.Solve(velocity, rate);
+}
+
+void ControllerCore::ComputeRate(double horizon_s) {
+  const InputPredictor& predictor = compensator_->predictor();
+  if (predictor.samples() < kRateMinSamples) {
+    rate_.setZero();
+    return;
+  }
+  const Vector3 omega = predictor.RotationPerSample() / predictor.nominal_sample_period_s();
+  // The rate where the update left the task (φ before the step, the measured input)...
+  SolveRate(problem_, omega, &rate_);
+  if (horizon_s > 0.0) {
+    // ...then again halfway to where the command will act (φ moved by that rate, the input
+    // predicted there): the ramp is a chord of the curved φ trajectory, and the midpoint's
+    // slope makes it meet the trajectory at the horizon to second order.
+    const double half_s = 0.5 * horizon_s;
+    step_ = integrator_->phi() + rate_ * half_s;
+    chain_->ComputePose(step_, &rate_pose_);
+    rate_problem_.chain = chain_.get();
+    rate_problem_.target = target_.get();
+    rate_problem_.pose = &rate_pose_;
+    rate_problem_.loop_mode = LoopMode::kModel;
+    rate_problem_.need_jacobian = false;
+    rate_problem_.s_in = predictor.PredictSeconds(half_s);
+    rate_problem_.s_out_measured = rate_problem_.s_in;
+    UpdateControlProblem(&rate_problem_);
+    SolveRate(rate_problem_, omega, &rate_);
+  }
+  if (!rate_.allFinite()) rate_.setZero();
+}
+
 void ControllerCore::RejectSample(std::string reason) {
   ++rejected_samples_;
   last_rejection_ = std::move(reason);
@@ -183,6 +234,21 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
   last_sample_ = sample.sequence_number();
   last_sample_ns_ = now_ns;
   lockstep_ = sample.lockstep();
+  const int64_t t_ns = sample.sample_time_ns();
+  last_sample_time_ns_ = t_ns;
+  // Ramp mode needs a driver that ramps; otherwise a predicting controller aims at a point.
+  const bool ramp = compensator_ && !lockstep_ && device_max_ramp_s_ > 0.0 &&
+                    settings_.prediction_mode == PredictionMode::kRamp;
+  if (applied_motion_.moving) {
+    applied_motion_.At(t_ns, &applied_phi_);
+    if (!obeyed_) Resync(applied_phi_);  // standby: follow the motion where it is now
+  }
+  if (obeyed_ && ramp && ramp_ && rate_time_ns_ != 0) {
+    // The waveplates moved along the latest command's ramp since its sample: so does φ.
+    const double dt_s = std::clamp(static_cast<double>(t_ns - rate_time_ns_) * 1e-9, 0.0, device_max_ramp_s_);
+    step_ = rate_ * dt_s;
+    integrator_->Apply(ControlStatus::kOk, step_);
+  }
 
   const auto start = std::chrono::steady_clock::now();
   if (!activated_) {
@@ -191,7 +257,16 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
   }
   chain_->ComputePose(integrator_->phi(), &pose_);
   problem_.pose = &pose_;
-  if (compensator_) {
+  if (ramp) {
+    // The measured input (horizon 0); the predictor fits the rotation for the rate, and the
+    // measured latency tells how far the ramp reaches before the command acts.
+    if (compensator_->predictor().samples() == 0) time_origin_ns_ = t_ns;
+    sample_times_ns_[sample.sequence_number() % kSampleTimeRing] = {sample.sequence_number(), t_ns};
+    horizon_s_ = PredictionHorizonS(sample);
+    problem_.s_in = compensator_->PredictAt(bus::ToStokes(sample.s_in()),
+                                            static_cast<double>(t_ns - time_origin_ns_) * 1e-9, 0.0);
+    // (PredictAt with horizon 0 returns the latest sample itself.)
+  } else if (compensator_) {
     sample_times_ns_[sample.sequence_number() % kSampleTimeRing] = {sample.sequence_number(),
                                                                     sample.sample_time_ns()};
     horizon_s_ = PredictionHorizonS(sample);
@@ -204,9 +279,11 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
   }
   problem_.s_out_measured = bus::ToStokes(sample.s_out());
   UpdateControlProblem(&problem_);
-  if (compensator_) compensator_->AddLead(&problem_);
+  if (compensator_ && !ramp) compensator_->AddLead(&problem_);
   const ControlStatus status = law_->ComputeUpdate(problem_, &delta_phi_);
   const ControlIntegrator::Outcome outcome = integrator_->Apply(status, delta_phi_);
+  if (ramp) ComputeRate(horizon_s_);
+  ramp_ = ramp;
   const double compute_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   ++updates_;
@@ -239,6 +316,12 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
   command.sample_publish_time_ns(sample.publish_time_ns());
   const ControlVector& phi = integrator_->phi();
   command.phi().assign(phi.data(), phi.data() + phi.size());
+  if (ramp) {
+    command.phi_rate_per_s().assign(rate_.data(), rate_.data() + rate_.size());
+    rate_time_ns_ = t_ns;
+  } else {
+    command.phi_rate_per_s().clear();
+  }
   command.publish_time_ns(wall_ns);
   last_answered_sample_ = sample.sequence_number();
   return &command;
@@ -255,8 +338,13 @@ msg::ControllerStatus ControllerCore::TakeStatus(int64_t now_ns, int64_t wall_ns
   }
   std::string condition = condition_;
   if (compensator_ && configured()) {
-    condition += fmt::format(" (predicting {:.3f} ms ahead, input at {:.0f} rad/s)", horizon_s_ * 1e3,
-                             compensator_->predictor().RateRadPerS());
+    if (ramp_) {
+      condition += fmt::format(" (ramping with the input at {:.0f} rad/s)",
+                               compensator_->predictor().RateRadPerS());
+    } else {
+      condition += fmt::format(" (predicting {:.3f} ms ahead, input at {:.0f} rad/s)", horizon_s_ * 1e3,
+                               compensator_->predictor().RateRadPerS());
+    }
   }
   msg::ControllerStatus status;
   status.bench_id(settings_.bench_id);

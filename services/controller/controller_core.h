@@ -24,6 +24,24 @@
 // Samples are observed at their timestamps (InputPredictor::ObserveAt), so a real-time
 // polarimeter's jitter does not bias the fitted rotation.
 //
+// That is PredictionMode::kLatency. The default in real time, kRamp, does better: a single
+// horizon cannot fit a latency that jitters by a sample or two, so the command carries the
+// motion instead of a point. From the fitted input rotation ω (rad/s, input frame), the rate
+// that keeps the output still is the solution of the task's differential kinematics
+// (paper eq. 4 with the input moving: Ṡ_out = Jφ̇ + (Mω) × S_out):
+//
+//   point target:  T φ̇ = −Eᵀ(ω × S_in)          (T, E: the reduced task, control_problem.h)
+//   set target:    nᵀJ φ̇ = −(Mᵀn)·(ω × S_in)
+//
+// solved with the damped task pseudo-inverse (minimum norm: no null-space motion). The command
+// is φ at the sample's time plus φ̇; the driver moves the waveplates along φ + φ̇·(t − t_sample)
+// in bench time (WaveplateState's ramp), so wherever the command lands in time it is right for
+// that moment. The integrator follows the same motion: before each update it advances by
+// φ̇·(t_k − t_(k−1)) of its latest command, then the law corrects what the motion missed from
+// the measurement at t_k (no lead, no horizon). A standby controller follows the applied
+// motion evaluated at each sample's time. Lockstep samples get no rate (the simulated bench's
+// delay line applies points), so lockstep still equals `dpc sim`.
+//
 // When samples stop, nothing is integrated (the controller only acts on samples): the
 // integrator is frozen, the status says "frozen", and after a gap longer than freeze_after_s the
 // controller re-joins from the applied φ when samples resume.
@@ -39,12 +57,20 @@
 #include "dpc/control/control_law.h"
 #include "dpc/control/control_law_factory.h"
 #include "dpc/control/control_problem.h"
+#include "dpc/bus/message_conversion.h"
 #include "dpc/control/delay_compensator.h"
+#include "dpc/control/task_pseudo_inverse.h"
 #include "dpc/control/target.h"
 #include "dpc/msg/bench.h"
 #include "dpc/optics/waveplate_chain.h"
 
 namespace dpc::services {
+
+/// How a predicting controller (controller.prediction set) compensates the real-time loop delay.
+enum class PredictionMode {
+  kRamp,     ///< commands carry φ̇ from the fitted input rotation; the driver ramps (default)
+  kLatency,  ///< the law aims at the input predicted across the measured latency (a point)
+};
 
 struct ControllerSettings {
   std::string bench_id = "bench1";
@@ -53,6 +79,7 @@ struct ControllerSettings {
   ControllerConfig controller;      ///< law, step, loop mode (scenario's controller section)
   SimulationConfig simulation;      ///< for laws that need sample-rate settings (dither)
   double freeze_after_s = 20e-3;    ///< a sample gap longer than this freezes the loop
+  PredictionMode prediction_mode = PredictionMode::kRamp;
 };
 
 class ControllerCore {
@@ -84,6 +111,8 @@ class ControllerCore {
   /// Delay compensation: on, and the horizon (seconds) the latest update predicted across.
   bool predicting() const { return compensator_.has_value(); }
   double prediction_horizon_s() const { return horizon_s_; }
+  /// Ramp mode: the rate of the latest command (empty: none).
+  const ControlVector& phi_rate_per_s() const { return rate_; }
 
  private:
   void Resync(const ControlVector& phi);
@@ -91,6 +120,11 @@ class ControllerCore {
   /// Real-time. The horizon for the sample at t_ns: the measured loop latency (see the file
   /// comment), or the configured one.
   double PredictionHorizonS(const msg::StokesSample& sample);
+  /// Ramp mode: rate_ = the φ̇ that keeps the output still while the input turns at the fitted
+  /// rate (see the file comment), evaluated halfway across `horizon_s` (the measured latency).
+  void ComputeRate(double horizon_s);
+  /// The φ̇ for `problem` (its task, basis and input) and input rotation ω (rad/s).
+  void SolveRate(const ControlProblem& problem, const Vector3& omega, ControlVector* rate);
 
   ControllerSettings settings_;
   std::unique_ptr<WaveplateChain> chain_;
@@ -107,7 +141,8 @@ class ControllerCore {
   bool activated_ = false;
   bool lockstep_ = false;            ///< the latest sample came from a lockstep bench
   bool law_for_point_ = true;        ///< the law was built for a point target
-  ControlVector applied_phi_;
+  ControlVector applied_phi_;         ///< the applied motion at the latest sample's time
+  bus::AppliedTrajectory applied_motion_;  ///< from the latest driver state
   uint64_t last_answered_sample_ = 0;  ///< of this controller's latest command
   std::optional<msg::WaveplateCommand> last_command_;
   uint64_t last_sample_ = 0;
@@ -117,6 +152,15 @@ class ControllerCore {
 
   // Delay compensation (unset: off).
   std::optional<DelayCompensator> compensator_;
+  bool ramp_ = false;                     ///< the latest update was in ramp mode
+  ControlVector rate_;                    ///< the latest command's φ̇ (ramp mode)
+  ControlVector step_;                    ///< scratch: rate_ × the time since the last command
+  int64_t rate_time_ns_ = 0;              ///< its sample time
+  double device_max_ramp_s_ = 0.0;        ///< the driver's (device description); 0: no ramps
+  int64_t last_sample_time_ns_ = 0;       ///< the latest sample's bench time
+  TaskPseudoInverse rate_solver_;
+  ChainPose rate_pose_;                   ///< the chain halfway across the horizon
+  ControlProblem rate_problem_;
   double horizon_s_ = 0.0;                ///< the latest horizon used
   double latency_estimate_s_ = -1.0;      ///< smoothed t_j − t_a; < 0: none yet
   uint64_t state_answers_sample_ = 0;     ///< of the latest state obeying this controller

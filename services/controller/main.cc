@@ -35,6 +35,13 @@ int Run(int argc, char** argv) {
                  "A gap in the samples longer than this freezes the loop; it re-joins from the "
                  "applied φ when samples resume")
       ->check(CLI::Range(1e-4, 60.0))->capture_default_str();
+  std::string predict_mode = "ramp";
+  app.add_option("--predict-mode", predict_mode,
+                 "With --predict in real time: 'ramp' (commands carry φ̇ from the fitted input "
+                 "rotation; the driver moves along it) or 'latency' (aim at the input predicted "
+                 "across the measured loop latency). Ramp falls back to latency if the driver "
+                 "does not ramp")
+      ->check(CLI::IsMember({"ramp", "latency"}))->capture_default_str();
   double status_period_s = 0.02;
   app.add_option("--status-period-s", status_period_s, "Status publication period")
       ->check(CLI::Range(1e-3, 10.0))->capture_default_str();
@@ -44,6 +51,7 @@ int Run(int argc, char** argv) {
     return app.exit(e);
   }
   settings.bench_id = common.bench_id;
+  settings.prediction_mode = predict_mode == "latency" ? PredictionMode::kLatency : PredictionMode::kRamp;
   SetUpLogging("controller " + settings.controller_id, common);
   try {
     const ScenarioConfig scenario = LoadServiceScenario(common);

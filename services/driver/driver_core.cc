@@ -23,6 +23,9 @@ DriverCore::DriverCore(std::vector<StageConfig> stages, DriverSettings settings,
       backend_(backend),
       applied_(backend->Applied()),
       saturated_(static_cast<size_t>(chain_.control_count()), false) {
+  if (applied_.rate_per_s.size() != applied_.phi.size()) {
+    applied_.rate_per_s = ControlVector::Zero(applied_.phi.size());
+  }
   reason_ = "holding: no controller yet";
 }
 
@@ -57,6 +60,17 @@ void DriverCore::Obey(const std::string& id, const std::string& reason) {
 void DriverCore::Hold(const std::string& reason) {
   obeyed_.clear();
   reason_ = reason;
+  StopMotion();
+}
+
+void DriverCore::StopMotion() {
+  if (!applied_.moving) return;
+  bus::AppliedTrajectory still = applied_;
+  applied_.At(applied_.end_ns, &still.phi);
+  still.rate_per_s.setZero();
+  still.start_ns = applied_.end_ns;
+  still.moving = false;
+  if (backend_->Apply(still).empty()) applied_ = backend_->Applied();
 }
 
 void DriverCore::Reject(const std::string& controller_id, const std::string& reason) {
@@ -113,32 +127,58 @@ std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCom
                            : fmt::format("obeying {} (priority {})", id, record.priority));
   }
 
-  // Apply: clamp to the ranges, then limit the slew over the bench time since the last command.
-  ControlVector phi(chain_.control_count());
-  for (int i = 0; i < chain_.control_count(); ++i) phi[i] = command.phi()[static_cast<size_t>(i)];
+  // Apply: clamp to the ranges, then limit the slew over the bench time since the last command,
+  // from where the current motion has the waveplates at this command's time.
+  const int n = chain_.control_count();
+  const int64_t start_ns = command.sample_time_ns();
+  bus::AppliedTrajectory motion = applied_;
+  applied_.At(start_ns, &motion.phi);
+  const ControlVector base = motion.phi;
   bool limited = false;
   const double max_step =
       settings_.max_slew_per_s > 0.0 && applied_any_
           ? settings_.max_slew_per_s *
-                std::max(0.0, static_cast<double>(command.sample_time_ns() -
-                                                  last_applied_sample_time_ns_) * 1e-9)
+                std::max(0.0, static_cast<double>(start_ns - last_applied_sample_time_ns_) * 1e-9)
           : INFINITY;
-  for (int i = 0; i < chain_.control_count(); ++i) {
-    double value = phi[i];
-    if (const auto& range = chain_.controls()[static_cast<size_t>(i)].range) value = range->Clamp(value);
-    value = std::clamp(value, applied_[i] - max_step, applied_[i] + max_step);
-    saturated_[static_cast<size_t>(i)] = value != phi[i];
-    limited = limited || value != phi[i];
-    phi[i] = value;
+  const double max_rate = settings_.max_slew_per_s > 0.0 ? settings_.max_slew_per_s : INFINITY;
+  const bool has_rate = !command.phi_rate_per_s().empty();
+  int64_t end_ns = start_ns + static_cast<int64_t>(settings_.max_ramp_s * 1e9);
+  bool moving = false;
+  for (int i = 0; i < n; ++i) {
+    const double wanted = command.phi()[static_cast<size_t>(i)];
+    double value = wanted;
+    const auto& range = chain_.controls()[static_cast<size_t>(i)].range;
+    if (range) value = range->Clamp(value);
+    value = std::clamp(value, base[i] - max_step, base[i] + max_step);
+    const double wanted_rate = has_rate ? command.phi_rate_per_s()[static_cast<size_t>(i)] : 0.0;
+    double rate = std::clamp(wanted_rate, -max_rate, max_rate);
+    if (range && rate != 0.0) {
+      // The ramp stops when the first stage reaches its range end; one already there gets none.
+      const double room = rate > 0.0 ? range->max - value : value - range->min;
+      if (room <= 0.0) {
+        rate = 0.0;
+      } else {
+        end_ns = std::min(end_ns, start_ns + static_cast<int64_t>(room / std::abs(rate) * 1e9));
+      }
+    }
+    const bool clipped = value != wanted || rate != wanted_rate;
+    saturated_[static_cast<size_t>(i)] = clipped;
+    limited = limited || clipped;
+    motion.phi[i] = value;
+    motion.rate_per_s[i] = rate;
+    moving = moving || rate != 0.0;
   }
-  if (std::string failure = backend_->Apply(phi); !failure.empty()) {
+  motion.start_ns = start_ns;
+  motion.end_ns = std::max(start_ns, end_ns);
+  motion.moving = moving && motion.end_ns > start_ns;
+  if (std::string failure = backend_->Apply(motion); !failure.empty()) {
     Reject(id, fmt::format("backend {} failed: {}", backend_->name(), failure));
     Hold(fmt::format("holding: backend {} failed: {}", backend_->name(), failure));
     return Publishable(wall_ns);
   }
   applied_ = backend_->Applied();
   applied_any_ = true;
-  last_applied_sample_time_ns_ = command.sample_time_ns();
+  last_applied_sample_time_ns_ = start_ns;
   ++applied_count_;
   if (limited) ++limited_;
   answers_sample_ = command.answers_sample();
@@ -190,7 +230,13 @@ msg::WaveplateState DriverCore::State(int64_t wall_ns) const {
   state.sample_publish_time_ns(sample_publish_time_ns_);
   state.command_receive_time_ns(command_receive_time_ns_);
   state.publish_time_ns(wall_ns);
-  state.phi_applied().assign(applied_.data(), applied_.data() + applied_.size());
+  state.phi_applied().assign(applied_.phi.data(), applied_.phi.data() + applied_.phi.size());
+  if (applied_.moving) {
+    state.phi_rate_per_s().assign(applied_.rate_per_s.data(),
+                                  applied_.rate_per_s.data() + applied_.rate_per_s.size());
+  }
+  state.ramp_start_time_ns(applied_.start_ns);
+  state.ramp_end_time_ns(applied_.moving ? applied_.end_ns : applied_.start_ns);
   state.saturated().assign(saturated_.begin(), saturated_.end());
   state.mode(obeyed_.empty() ? msg::DRIVER_HOLDING : msg::DRIVER_ACTIVE);
   state.reason(reason_.substr(0, 255));

@@ -14,7 +14,15 @@
 // Every command is checked (CheckCommandShape: stage count, NaN/Inf, oversized) and a bad one
 // is counted and reported, never applied. A good one is clamped to each stage's range and
 // slew-limited (max_slew_per_s × the bench time since the last applied command); the state
-// says which stages were limited. Bumpless switching is the controllers' part: a standby
+// says which stages were limited.
+//
+// Ramps. A command may carry φ̇ (phi_rate_per_s): the waveplates then move along
+// φ + φ̇·(t − sample_time) in bench time, so a command that arrived late is where it should be
+// now, whatever the loop's delay and its jitter. The motion is bounded: it stops after
+// max_ramp_s (the next command normally replaces it long before), or when the first stage
+// reaches its range end (a stage already at its end with φ̇ pointing out gets no rate), and
+// |φ̇| ≤ max_slew_per_s.
+// Holding turns the motion into the point where it ends, with no rate. Bumpless switching is the controllers' part: a standby
 // controller follows the applied φ from the state, so its first obeyed command continues from
 // there.
 
@@ -38,6 +46,7 @@ struct DriverSettings {
   double min_silence_s = 2e-3;        ///< shortest silence that counts as a dead controller
   double silence_intervals = 8.0;     ///< or this many of its command intervals, if longer
   double holding_state_period_s = 5e-3;  ///< state heartbeat while holding
+  double max_ramp_s = 2e-3;           ///< a command's rate moves φ for at most this (bench time)
 };
 
 class DriverCore {
@@ -88,6 +97,8 @@ class DriverCore {
   void Obey(const std::string& id, const std::string& reason);
   void Hold(const std::string& reason);
   void Reject(const std::string& controller_id, const std::string& reason);
+  /// Sets the backend's motion to where it ends, with no rate (holding).
+  void StopMotion();
 
   WaveplateChain chain_;
   DriverSettings settings_;
@@ -96,7 +107,7 @@ class DriverCore {
 
   std::string obeyed_;               ///< "" while holding
   std::string reason_;
-  ControlVector applied_;
+  bus::AppliedTrajectory applied_;  ///< what the backend does (its Applied())
   std::vector<bool> saturated_;
   int64_t last_applied_sample_time_ns_ = 0;
   bool applied_any_ = false;

@@ -40,6 +40,10 @@ int Run(int argc, char** argv) {
   app.add_option("--silence-intervals", settings.silence_intervals,
                  "Silence timeout in command intervals")
       ->check(CLI::Range(2.0, 1000.0))->capture_default_str();
+  app.add_option("--max-ramp-s", settings.max_ramp_s,
+                 "A command's rate (phi_rate_per_s) moves the waveplates for at most this long of "
+                 "bench time; the next command normally replaces it long before")
+      ->check(CLI::Range(0.0, 1.0))->capture_default_str();
   double tick_s = 2.5e-4;
   app.add_option("--tick-s", tick_s, "Shortest interval between the driver's checks for silent controllers")
       ->check(CLI::Range(1e-5, 0.1))->capture_default_str();
@@ -81,7 +85,7 @@ int Run(int argc, char** argv) {
     auto target_writer = participant.MakeWriter<msg::Target>();
     auto reply_writer = participant.MakeWriter<msg::TargetReply>();
     device_writer->Write(bus::DescribeDevice(scenario.stages, common.bench_id, settings.driver_id,
-                                             settings.max_slew_per_s));
+                                             settings.max_slew_per_s, settings.max_ramp_s));
     uint64_t target_revision = 1;
     target_writer->Write(bus::TargetMessage(scenario.target, common.bench_id, target_revision, ""));
 

@@ -1,9 +1,15 @@
 #pragma once
 // Where the driver's validated commands go. The simulated device now; a hardware backend (a
 // DAC, a piezo controller, a motor stage) implements the same interface later.
+//
+// A command is a motion, not only a point: φ at the ramp's start plus a rate in bench time,
+// for a bounded interval (bus::AppliedTrajectory). A backend with its own update clock (a DAC
+// written every few µs) follows the ramp; one that cannot ramp applies the point and reports
+// a zero rate in Applied(), and the state then says the waveplates hold.
 
 #include <string>
 
+#include "dpc/bus/message_conversion.h"
 #include "dpc/optics/waveplate_chain.h"
 
 namespace dpc::services {
@@ -11,29 +17,31 @@ namespace dpc::services {
 class WaveplateBackend {
  public:
   virtual ~WaveplateBackend() = default;
-  /// Drives the waveplates to `phi` (one value per control, already inside the ranges and
-  /// slew limits). Returns an empty string on success, else what went wrong (the driver then
-  /// holds and reports it).
-  virtual std::string Apply(const ControlVector& phi) = 0;
-  /// What the device reports it applied (the simulated device: exactly the last Apply).
-  virtual ControlVector Applied() const = 0;
+  /// Drives the waveplates along `motion` (already inside the ranges and slew limits). Returns
+  /// an empty string on success, else what went wrong (the driver then holds and reports it).
+  virtual std::string Apply(const bus::AppliedTrajectory& motion) = 0;
+  /// What the device reports it is doing (the simulated device: exactly the last Apply).
+  virtual const bus::AppliedTrajectory& Applied() const = 0;
   virtual std::string name() const = 0;
 };
 
 /// The simulated device: applies instantly and exactly. The optics (S_out from φ) are simulated
-/// by the polarimeter service from the state the driver publishes.
+/// by the polarimeter service from the state the driver publishes, which carries the motion.
 class SimulatedWaveplates final : public WaveplateBackend {
  public:
-  explicit SimulatedWaveplates(ControlVector initial_phi) : phi_(std::move(initial_phi)) {}
-  std::string Apply(const ControlVector& phi) override {
-    phi_ = phi;
+  explicit SimulatedWaveplates(const ControlVector& initial_phi) {
+    motion_.phi = initial_phi;
+    motion_.rate_per_s = ControlVector::Zero(initial_phi.size());
+  }
+  std::string Apply(const bus::AppliedTrajectory& motion) override {
+    motion_ = motion;
     return {};
   }
-  ControlVector Applied() const override { return phi_; }
+  const bus::AppliedTrajectory& Applied() const override { return motion_; }
   std::string name() const override { return "simulated"; }
 
  private:
-  ControlVector phi_;
+  bus::AppliedTrajectory motion_;
 };
 
 }  // namespace dpc::services

@@ -54,17 +54,7 @@ BenchCore::BenchCore(ScenarioConfig scenario, BenchSettings settings)
 BenchCore::~BenchCore() = default;
 
 std::string BenchCore::CheckApplied(const msg::WaveplateState& state) const {
-  const size_t controls = static_cast<size_t>(chain_->control_count());
-  if (state.phi_applied().size() != controls) {
-    return fmt::format("phi_applied has {} values, the device has {} controls",
-                       state.phi_applied().size(), controls);
-  }
-  for (size_t i = 0; i < controls; ++i) {
-    if (!std::isfinite(state.phi_applied()[i])) {
-      return fmt::format("phi_applied[{}] = {} is not finite", i, state.phi_applied()[i]);
-    }
-  }
-  return {};
+  return bus::CheckStateShape(state, chain_->control_count());
 }
 
 msg::StokesSample BenchCore::MakeSample(uint64_t sequence, int64_t sample_time_ns,
@@ -168,7 +158,11 @@ BenchReport BenchCore::RunRealTime(BenchLink* link, SimulationObserver* observer
   double statistics_origin_s = 0.0;
   ChainPose pose;
   ControlVector phi = initial_phi_;
-  ControlVector incoming = initial_phi_;  // the latest state's φ, copied in without allocating
+  ControlVector phi_now = initial_phi_;
+  // The latest state's motion, copied in without allocating (its vectors keep their size).
+  bus::AppliedTrajectory motion;
+  motion.phi = initial_phi_;
+  motion.rate_per_s = ControlVector::Zero(initial_phi_.size());
   chain.ComputePose(phi, &pose);
 
   BenchReport report;
@@ -195,18 +189,22 @@ BenchReport BenchCore::RunRealTime(BenchLink* link, SimulationObserver* observer
                                                    std::nullopt, settings_.settle_s);
       statistics_origin_s = static_cast<double>(k) * dt_s;
     }
-    if (link->TakeApplied(&incoming) && incoming != phi) {
-      phi = incoming;
-      chain.ComputePose(phi, &pose);
-    }
     const double t_s = static_cast<double>(k) * dt_s;
+    const int64_t t_ns = SecondsToNs(t_s);
+    if (link->TakeApplied(&motion) || motion.moving) {
+      motion.At(t_ns, &phi_now);
+      if (phi_now != phi) {
+        phi = phi_now;
+        chain.ComputePose(phi, &pose);
+      }
+    }
     const StokesVector& s_in = run.input.Next();
     const StokesVector s_out = chain.Output(pose, s_in);
     statistics->AddSample(t_s - statistics_origin_s, s_out, pose.phi);
     if (run.TakesSample()) {
       run.observer().OnSample(SampleView{k, t_s, s_in, s_out, pose.phi, target->DistanceRad(s_out) * kRadToDeg});
     }
-    link->Publish(MakeSample(static_cast<uint64_t>(k + 1), SecondsToNs(t_s),
+    link->Publish(MakeSample(static_cast<uint64_t>(k + 1), t_ns,
                              run.input_polarimeter.Measure(s_in), run.output_polarimeter.Measure(s_out)));
     ++report.published;
     if (((k + 1) & 1023) == 0 && !run.EndBlock(k + 1)) {

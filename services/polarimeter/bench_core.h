@@ -12,7 +12,9 @@
 //
 // Real time (wall clock). Every 1/rate_hz the input advances by one sample period (the
 // scenario's input runs at rate_hz), S_out comes from the latest state received, and the
-// sample is published; the loop delay is what the processes and DDS take.
+// sample is published; the loop delay is what the processes and DDS take. A state that
+// describes a motion (a ramp, see WaveplateState) is evaluated at each sample's bench time:
+// the waveplates move between states as a device that ramps its drive would.
 //
 // DDS-free: the service's main.cc connects it to the bus through BenchLink.
 
@@ -23,6 +25,7 @@
 #include <optional>
 #include <string>
 
+#include "dpc/bus/message_conversion.h"
 #include "dpc/config/scenario_config.h"
 #include "dpc/control/target.h"
 #include "dpc/msg/bench.h"
@@ -40,9 +43,9 @@ class BenchLink {
   /// the sample if no answer comes, e.g. before a controller matched). nullopt: stop (signal or
   /// timeout; `why` says which).
   virtual std::optional<ControlVector> AwaitAnswer(const msg::StokesSample& sample, std::string* why) = 0;
-  /// Real time: if a valid state arrived since the last call, copies its applied φ into `*phi`
-  /// (sized for the device, so nothing is allocated) and returns true.
-  virtual bool TakeApplied(ControlVector* phi) = 0;
+  /// Real time: if a valid state arrived since the last call, copies the waveplates' motion it
+  /// describes into `*motion` (sized for the device, so nothing is allocated) and returns true.
+  virtual bool TakeApplied(bus::AppliedTrajectory* motion) = 0;
   /// Real time: the latest accepted target, if it changed since the last call.
   virtual std::optional<TargetConfig> TargetChange() = 0;
   virtual bool stop_requested() = 0;
@@ -78,7 +81,7 @@ class BenchCore {
   const ScenarioConfig& scenario() const { return scenario_; }
   const WaveplateChain& chain() const { return *chain_; }
   int control_count() const { return chain_->control_count(); }
-  /// Whether `phi` (from a state) fits the device: one finite value per control.
+  /// Whether a state fits the device (bus::CheckStateShape): empty, or why not.
   std::string CheckApplied(const msg::WaveplateState& state) const;
 
  private:

@@ -30,7 +30,7 @@ class DdsBenchLink final : public BenchLink {
       : bench_(bench),
         signals_(signals),
         lockstep_timeout_s_(lockstep_timeout_s),
-        latest_(ControlVector::Zero(bench->control_count())) {
+        latest_{ControlVector::Zero(bench->control_count()), ControlVector::Zero(bench->control_count())} {
     writer_ = participant->MakeWriter<msg::StokesSample>();
     states_ = participant->MakeReader<msg::WaveplateState>(
         bench_id, [this](const msg::WaveplateState& state, const auto&) { OnState(state); });
@@ -75,10 +75,14 @@ class DdsBenchLink final : public BenchLink {
     return phi;
   }
 
-  bool TakeApplied(ControlVector* phi) override {
+  bool TakeApplied(bus::AppliedTrajectory* motion) override {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!latest_fresh_) return false;
-    *phi = latest_;
+    motion->phi = latest_.phi;
+    motion->rate_per_s = latest_.rate_per_s;
+    motion->start_ns = latest_.start_ns;
+    motion->end_ns = latest_.end_ns;
+    motion->moving = latest_.moving;
     latest_fresh_ = false;
     return true;
   }
@@ -108,10 +112,10 @@ class DdsBenchLink final : public BenchLink {
     }
     std::lock_guard<std::mutex> lock(mutex_);
     // CheckApplied guarantees one value per control: latest_ keeps its size, nothing allocates.
-    for (size_t i = 0; i < state.phi_applied().size(); ++i) latest_[static_cast<int>(i)] = state.phi_applied()[i];
+    bus::ReadTrajectory(state, &latest_);
     latest_fresh_ = true;
     if (awaited_ != 0 && state.answers_sample() == awaited_) {
-      answer_ = latest_;
+      answer_ = latest_.phi;  // lockstep: the point (lockstep controllers send no rate)
       awaited_ = 0;
       answered_.notify_one();
     }
@@ -139,7 +143,7 @@ class DdsBenchLink final : public BenchLink {
   std::condition_variable answered_;
   uint64_t awaited_ = 0;
   std::optional<ControlVector> answer_;
-  ControlVector latest_;        ///< the latest valid state's φ (one value per control)
+  bus::AppliedTrajectory latest_;  ///< the latest valid state's motion (one value per control)
   bool latest_fresh_ = false;   ///< latest_ arrived since the last TakeApplied
   std::optional<TargetConfig> target_change_;
   uint64_t target_revision_ = 1;  // revision 1 is the scenario's target, the bench's own

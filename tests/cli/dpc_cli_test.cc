@@ -65,6 +65,18 @@ class DpcCliTest : public ::testing::Test {
   fs::path dir_;
 };
 
+TEST_F(DpcCliTest, ShippedBenchScenariosRunAndLock) {
+  // The real-time bench's scenarios, simulated for 0.5 s at their 10 kHz (one sample of delay).
+  for (const char* name : {"bench_default", "bench_rotation", "bench_paper_diffusion"}) {
+    const Result r = Run("sim " + Scenario(name) + " --duration-s 0.5 --json");
+    ASSERT_EQ(r.exit_code, 0) << name << "\n" << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["samples"], 5000) << name;
+    ASSERT_FALSE(j["lock_time_s"].is_null()) << name;
+    EXPECT_LT(j["error_deg"]["mean"].get<double>(), 1.0) << name;
+  }
+}
+
 TEST_F(DpcCliTest, ShippedPaperScenariosLockAndKeepPhiBounded) {
   for (const char* name : {"paper_fig3", "paper_fig4", "paper_fig5"}) {
     const Result r = Run("sim " + Scenario(name) + " --json");

@@ -330,12 +330,13 @@ TEST_F(DpcTopicToolsTest, EchoStateJsonPrintsCompleteObjects) {
     const auto j = nlohmann::json::parse(line);  // throws (fails the test) if not JSON
     for (const char* key : {"bench_id", "sequence_number", "answers_sample", "sample_time_ns",
                             "sample_publish_time_ns", "command_receive_time_ns", "publish_time_ns",
-                            "phi_applied", "saturated", "mode", "reason", "obeyed_controller_id",
+                            "phi_applied", "phi_rate_per_s", "ramp_start_time_ns",
+                            "ramp_end_time_ns", "saturated", "mode", "reason", "obeyed_controller_id",
                             "obeyed_priority", "commands_applied", "commands_rejected",
                             "commands_limited", "controller_switches", "last_rejection"}) {
       EXPECT_TRUE(j.contains(key)) << key << " missing in " << line;
     }
-    EXPECT_EQ(j.size(), 18u) << line;
+    EXPECT_EQ(j.size(), 21u) << line;
     EXPECT_EQ(j["bench_id"], "bench1");
     ASSERT_TRUE(j["phi_applied"].is_array());
     EXPECT_EQ(j["phi_applied"].size(), 3u) << line;  // the default bench: 3 stages

@@ -170,7 +170,8 @@ Json ToJson(const msg::WaveplateCommand& m) {
               {"sample_time_ns", m.sample_time_ns()},
               {"sample_publish_time_ns", m.sample_publish_time_ns()},
               {"publish_time_ns", m.publish_time_ns()},
-              {"phi", Numbers(m.phi())}};
+              {"phi", Numbers(m.phi())},
+              {"phi_rate_per_s", Numbers(m.phi_rate_per_s())}};
 }
 
 Json ToJson(const msg::WaveplateState& m) {
@@ -184,6 +185,9 @@ Json ToJson(const msg::WaveplateState& m) {
               {"command_receive_time_ns", m.command_receive_time_ns()},
               {"publish_time_ns", m.publish_time_ns()},
               {"phi_applied", Numbers(m.phi_applied())},
+              {"phi_rate_per_s", Numbers(m.phi_rate_per_s())},
+              {"ramp_start_time_ns", m.ramp_start_time_ns()},
+              {"ramp_end_time_ns", m.ramp_end_time_ns()},
               {"saturated", saturated},
               {"mode", DriverModeName(m.mode())},
               {"reason", Text(m.reason())},
@@ -224,7 +228,8 @@ Json ToJson(const msg::DeviceDescription& m) {
   return Json{{"bench_id", Text(m.bench_id())},
               {"driver_id", Text(m.driver_id())},
               {"stages", stages},
-              {"max_slew_per_s", Number(m.max_slew_per_s())}};
+              {"max_slew_per_s", Number(m.max_slew_per_s())},
+              {"max_ramp_s", Number(m.max_ramp_s())}};
 }
 
 Json ToJson(const msg::Target& m) {
@@ -264,9 +269,10 @@ std::string ToText(const msg::StokesSample& m) {
 }
 
 std::string ToText(const msg::WaveplateCommand& m) {
-  return fmt::format("[{}] command from {} (priority {}) #{} answers sample #{} t={:.6f} s phi={}",
+  return fmt::format("[{}] command from {} (priority {}) #{} answers sample #{} t={:.6f} s phi={}{}",
                      Text(m.bench_id()), Text(m.controller_id()), m.priority(), m.sequence_number(),
-                     m.answers_sample(), Seconds(m.sample_time_ns()), Values(m.phi()));
+                     m.answers_sample(), Seconds(m.sample_time_ns()), Values(m.phi()),
+                     m.phi_rate_per_s().empty() ? "" : " phi_rate_per_s=" + Values(m.phi_rate_per_s()));
 }
 
 std::string ToText(const msg::WaveplateState& m) {
@@ -279,10 +285,14 @@ std::string ToText(const msg::WaveplateState& m) {
   const bool active = m.mode() == msg::DRIVER_ACTIVE;
   const std::string obeyed = Text(m.obeyed_controller_id());
   return fmt::format(
-      "[{}] state #{} {} obeyed={} (priority {}) phi_applied={}{} answers sample #{} t={:.6f} s "
+      "[{}] state #{} {} obeyed={} (priority {}) phi_applied={}{}{} answers sample #{} t={:.6f} s "
       "applied={} rejected={} limited={} switches={}{}",
       Text(m.bench_id()), m.sequence_number(), active ? "ACTIVE" : "HOLDING",
       obeyed.empty() ? "-" : obeyed, m.obeyed_priority(), Values(m.phi_applied()),
+      m.phi_rate_per_s().empty()
+          ? ""
+          : fmt::format(" phi_rate_per_s={} ramp=[{:.6f}, {:.6f}] s", Values(m.phi_rate_per_s()),
+                        Seconds(m.ramp_start_time_ns()), Seconds(m.ramp_end_time_ns())),
       saturated.empty() ? "" : " saturated=[" + saturated + "]", m.answers_sample(),
       Seconds(m.sample_time_ns()), m.commands_applied(), m.commands_rejected(),
       m.commands_limited(), m.controller_switches(),
@@ -311,8 +321,9 @@ std::string ToText(const msg::DeviceDescription& m) {
       stages += (Text(s.name()).empty() ? "adjustable" : Text(s.name())) + " adjustable-axis";
     }
   }
-  return fmt::format("[{}] device of driver {}: {} stages [{}] max_slew_per_s={:g}", Text(m.bench_id()),
-                     Text(m.driver_id()), m.stages().size(), stages, m.max_slew_per_s());
+  return fmt::format("[{}] device of driver {}: {} stages [{}] max_slew_per_s={:g} max_ramp_s={:g}",
+                     Text(m.bench_id()), Text(m.driver_id()), m.stages().size(), stages,
+                     m.max_slew_per_s(), m.max_ramp_s());
 }
 
 std::string ToText(const msg::Target& m) {

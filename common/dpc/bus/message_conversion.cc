@@ -122,16 +122,71 @@ std::string CheckCommandShape(const msg::WaveplateCommand& command, int control_
       return fmt::format("phi[{}] = {} is not finite", i, command.phi()[i]);
     }
   }
+  const size_t rates = command.phi_rate_per_s().size();
+  if (rates != 0 && rates != count) {
+    return fmt::format("phi_rate_per_s has {} values, the device has {} controls (or none: φ holds)",
+                       rates, control_count);
+  }
+  for (size_t i = 0; i < rates; ++i) {
+    if (!std::isfinite(command.phi_rate_per_s()[i])) {
+      return fmt::format("phi_rate_per_s[{}] = {} is not finite", i, command.phi_rate_per_s()[i]);
+    }
+  }
   return {};
+}
+
+std::string CheckStateShape(const msg::WaveplateState& state, int control_count) {
+  const size_t controls = static_cast<size_t>(control_count);
+  if (state.phi_applied().size() != controls) {
+    return fmt::format("phi_applied has {} values, the device has {} controls",
+                       state.phi_applied().size(), controls);
+  }
+  for (size_t i = 0; i < controls; ++i) {
+    if (!std::isfinite(state.phi_applied()[i])) {
+      return fmt::format("phi_applied[{}] = {} is not finite", i, state.phi_applied()[i]);
+    }
+  }
+  const size_t rates = state.phi_rate_per_s().size();
+  if (rates != 0 && rates != controls) {
+    return fmt::format("phi_rate_per_s has {} values, the device has {} controls (or none)", rates,
+                       controls);
+  }
+  for (size_t i = 0; i < rates; ++i) {
+    if (!std::isfinite(state.phi_rate_per_s()[i])) {
+      return fmt::format("phi_rate_per_s[{}] = {} is not finite", i, state.phi_rate_per_s()[i]);
+    }
+  }
+  if (rates != 0 && state.ramp_end_time_ns() < state.ramp_start_time_ns()) {
+    return fmt::format("ramp_end_time_ns {} is before ramp_start_time_ns {}", state.ramp_end_time_ns(),
+                       state.ramp_start_time_ns());
+  }
+  return {};
+}
+
+void ReadTrajectory(const msg::WaveplateState& state, AppliedTrajectory* out) {
+  const int n = static_cast<int>(state.phi_applied().size());
+  if (out->phi.size() != n) out->phi.resize(n);
+  if (out->rate_per_s.size() != n) out->rate_per_s.resize(n);
+  bool moving = false;
+  for (int i = 0; i < n; ++i) {
+    out->phi[i] = state.phi_applied()[static_cast<size_t>(i)];
+    const double rate = state.phi_rate_per_s().empty() ? 0.0 : state.phi_rate_per_s()[static_cast<size_t>(i)];
+    out->rate_per_s[i] = rate;
+    moving = moving || rate != 0.0;
+  }
+  out->start_ns = state.ramp_start_time_ns();
+  out->end_ns = state.ramp_end_time_ns();
+  out->moving = moving && out->end_ns > out->start_ns;
 }
 
 msg::DeviceDescription DescribeDevice(const std::vector<StageConfig>& stages,
                                       const std::string& bench_id, const std::string& driver_id,
-                                      double max_slew_per_s) {
+                                      double max_slew_per_s, double max_ramp_s) {
   msg::DeviceDescription out;
   out.bench_id(bench_id);
   out.driver_id(driver_id);
   out.max_slew_per_s(max_slew_per_s);
+  out.max_ramp_s(max_ramp_s);
   for (const StageConfig& stage : stages) {
     msg::Stage s;
     s.kind(stage.kind == StageConfig::Kind::kFixedAxis ? msg::STAGE_FIXED_AXIS

@@ -3,7 +3,9 @@
 // every service applies to what arrives: a message that fails a check is counted, reported by
 // its reason, and never applied.
 
+#include <algorithm>
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,14 +27,44 @@ std::string CheckUnitStokes(const std::array<double, 3>& s, const char* field);
 std::string CheckStokesSample(const msg::StokesSample& sample);
 
 /// Empty if the command fits a device of `control_count` controls: one finite φ per control
-/// (no more than msg::MAX_CONTROLS), a controller id. Ranges and slew are the driver's
-/// business (it clamps and reports), not a reason to refuse.
+/// (no more than msg::MAX_CONTROLS), phi_rate_per_s empty or one finite value per control, a
+/// controller id. Ranges and slew are the driver's business (it clamps and reports), not a
+/// reason to refuse.
 std::string CheckCommandShape(const msg::WaveplateCommand& command, int control_count);
 
+/// The waveplates' motion a driver's state describes, in bench time (WaveplateState):
+/// φ(t) = phi + rate_per_s·(min(max(t, start_ns), end_ns) − start_ns).
+struct AppliedTrajectory {
+  ControlVector phi;          ///< at start_ns
+  ControlVector rate_per_s;   ///< per second of bench time; zero: φ holds
+  int64_t start_ns = 0;
+  int64_t end_ns = 0;
+  bool moving = false;        ///< a non-zero rate over a non-empty interval
+
+  /// Real-time. φ at bench time t_ns into `out` (no allocation once `out` has the size).
+  void At(int64_t t_ns, ControlVector* out) const {
+    *out = phi;
+    if (moving) {
+      const int64_t t = std::min(std::max(t_ns, start_ns), end_ns);
+      *out += rate_per_s * (static_cast<double>(t - start_ns) * 1e-9);
+    }
+  }
+};
+
+/// Empty if the state fits a device of `control_count` controls: one finite phi_applied per
+/// control, phi_rate_per_s empty or one finite value per control, ramp_end_time_ns not before
+/// ramp_start_time_ns.
+std::string CheckStateShape(const msg::WaveplateState& state, int control_count);
+
+/// Real-time. The motion of a state that passed CheckStateShape, into `out` (its vectors sized
+/// for the device are reused: nothing allocates).
+void ReadTrajectory(const msg::WaveplateState& state, AppliedTrajectory* out);
+
 /// The device's stages as the driver describes them.
+/// `max_ramp_s` > 0: the driver follows commands' rates for that long (0: it does not ramp).
 msg::DeviceDescription DescribeDevice(const std::vector<StageConfig>& stages,
                                       const std::string& bench_id, const std::string& driver_id,
-                                      double max_slew_per_s);
+                                      double max_slew_per_s, double max_ramp_s = 0.0);
 
 /// The stages of a description, checked with the scenario rules (ValidateDeviceStages).
 /// Throws ScenarioError (field path "device.stages[i]…") or std::invalid_argument for values

@@ -29,6 +29,59 @@ TEST(CheckCommandShape, NamesTheProblem) {
   c.phi({0.1, 0.2, 0.3});
   c.controller_id("");
   EXPECT_NE(CheckCommandShape(c, 3).find("controller_id"), std::string::npos);
+  c.controller_id("A");
+  c.phi_rate_per_s({1.0, 2.0, 3.0});
+  EXPECT_EQ(CheckCommandShape(c, 3), "");
+  c.phi_rate_per_s({1.0, 2.0});
+  EXPECT_NE(CheckCommandShape(c, 3).find("phi_rate_per_s has 2 values"), std::string::npos);
+  c.phi_rate_per_s({1.0, INFINITY, 3.0});
+  EXPECT_NE(CheckCommandShape(c, 3).find("phi_rate_per_s[1]"), std::string::npos);
+}
+
+TEST(CheckStateShape, NamesTheProblem) {
+  msg::WaveplateState s;
+  s.phi_applied({0.1, 0.2, 0.3});
+  EXPECT_EQ(CheckStateShape(s, 3), "");
+  EXPECT_NE(CheckStateShape(s, 2).find("phi_applied has 3 values"), std::string::npos);
+  s.phi_applied({0.1, NAN, 0.3});
+  EXPECT_NE(CheckStateShape(s, 3).find("phi_applied[1]"), std::string::npos);
+  s.phi_applied({0.1, 0.2, 0.3});
+  s.phi_rate_per_s({1.0});
+  EXPECT_NE(CheckStateShape(s, 3).find("phi_rate_per_s has 1 values"), std::string::npos);
+  s.phi_rate_per_s({1.0, 0.0, NAN});
+  EXPECT_NE(CheckStateShape(s, 3).find("phi_rate_per_s[2]"), std::string::npos);
+  s.phi_rate_per_s({1.0, 0.0, -2.0});
+  s.ramp_start_time_ns(5'000'000);
+  s.ramp_end_time_ns(4'000'000);
+  EXPECT_NE(CheckStateShape(s, 3).find("ramp_end_time_ns"), std::string::npos);
+}
+
+TEST(AppliedTrajectory, MovesBetweenItsStartAndEndOnly) {
+  msg::WaveplateState s;
+  s.phi_applied({0.1, 0.2, 0.3});
+  AppliedTrajectory motion;
+  ReadTrajectory(s, &motion);  // no rate: φ holds
+  EXPECT_FALSE(motion.moving);
+  ControlVector phi;
+  motion.At(123'456'789, &phi);
+  EXPECT_EQ(phi, (ControlVector(3) << 0.1, 0.2, 0.3).finished());
+  s.phi_rate_per_s({1.0, 0.0, -2.0});
+  s.ramp_start_time_ns(1'000'000);
+  s.ramp_end_time_ns(3'000'000);
+  ReadTrajectory(s, &motion);
+  EXPECT_TRUE(motion.moving);
+  motion.At(0, &phi);
+  EXPECT_NEAR(phi[0], 0.1, 1e-15);
+  motion.At(2'000'000, &phi);
+  EXPECT_NEAR(phi[0], 0.101, 1e-15);
+  EXPECT_NEAR(phi[2], 0.298, 1e-15);
+  motion.At(9'000'000, &phi);
+  EXPECT_NEAR(phi[0], 0.102, 1e-15);
+  EXPECT_NEAR(phi[2], 0.296, 1e-15);
+  // An empty interval does not move, whatever the rate.
+  s.ramp_end_time_ns(1'000'000);
+  ReadTrajectory(s, &motion);
+  EXPECT_FALSE(motion.moving);
 }
 
 TEST(DeviceDescription, RoundTripsEveryStageKindMapAndRange) {

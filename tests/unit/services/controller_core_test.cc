@@ -145,66 +145,102 @@ namespace {
 
 // Delay compensation in real time: a closed loop without DDS. The input turns about a tilted
 // axis at 300 rad/s; samples come every ~100 µs with jitter; the driver applies each command
-// `delay` samples after the sample it answers. The controller measures that latency from the
-// sample timestamps and predicts across it.
+// `delay` samples after the sample it answers (or a delay that varies between delay and
+// max_delay). The controller measures that latency from the sample timestamps and predicts
+// across it (kLatency), or sends rates that a ramping driver follows (kRamp).
 struct RealTimeLoopResult {
   double mean_error_deg = 0.0;
   double horizon_s = 0.0;
   std::string condition;
+  ControlVector last_rate;
 };
 
-RealTimeLoopResult RunRealTimeLoop(bool predict, int delay_samples) {
+struct RealTimeLoopOptions {
+  bool predict = false;
+  PredictionMode mode = PredictionMode::kLatency;
+  int delay_samples = 3;
+  int max_delay_samples = 3;     ///< > delay_samples: each sample's delay varies in between
+  double rate_rad_per_s = 300.0;
+};
+
+RealTimeLoopResult RunRealTimeLoop(const RealTimeLoopOptions& options) {
   ControllerSettings settings = Settings();
-  if (predict) settings.controller.prediction = PredictionConfig{};
+  if (options.predict) settings.controller.prediction = PredictionConfig{};
+  settings.prediction_mode = options.mode;
   ControllerCore core(settings);
   const auto stages = StagesFromAxes("131");
-  EXPECT_EQ(core.OnDevice(bus::DescribeDevice(stages, "bench1", "driver", 0.0)), "");
+  const double max_ramp_s = 2e-3;  // the driver's (DriverSettings' default)
+  EXPECT_EQ(core.OnDevice(bus::DescribeDevice(stages, "bench1", "driver", 0.0, max_ramp_s)), "");
   EXPECT_EQ(core.OnTarget(bus::TargetMessage(TargetConfig{}, "bench1", 1, "")), "");
   const WaveplateChain chain = BuildChain(stages);
   const Target target = BuildTarget(TargetConfig{});
   const Vector3 axis = Vector3(0.3, 0.2, 1.0).normalized();
-  const double rate_rad_per_s = 300.0;
   StokesVector s0(1.0, 0.0, 0.0);
   s0 = (s0 - axis.dot(s0) * axis).normalized();
 
-  std::vector<ControlVector> commands(1, ControlVector::Zero(3));  // commands[k]: answers sample k
+  // commands[j]: the command answering sample j (φ at its sample time t[j], rate).
+  struct Sent {
+    ControlVector phi, rate;
+    int64_t t_ns = 0;
+  };
+  std::vector<Sent> commands(1, Sent{ControlVector::Zero(3), ControlVector::Zero(3), 0});
   core.OnState(State({0, 0, 0}, "me", 0));
   int64_t t_ns = 1'000'000'000;
   double error_sum_deg = 0.0;
   int counted = 0;
+  int answered = 0;
   const int samples = 6000;
   for (int k = 1; k <= samples; ++k) {
     t_ns += 100'000 + ((k * 7919) % 21 - 10) * 2'000;  // 100 µs ± 20 µs
     const double t_s = static_cast<double>(t_ns - 1'000'000'000) * 1e-9;
-    const StokesVector s_in = RotationAboutAxis(axis, rate_rad_per_s * t_s) * s0;
-    // The φ applied now: the command answering sample k − delay (or the latest before it).
-    const int answered = std::max(0, std::min<int>(k - delay_samples, static_cast<int>(commands.size()) - 1));
-    const ControlVector& applied = commands[static_cast<size_t>(answered)];
-    const StokesVector s_out = chain.Output(applied, s_in);
+    const StokesVector s_in = RotationAboutAxis(axis, options.rate_rad_per_s * t_s) * s0;
+    // The command applied now: the one answering sample k − delay (or the latest before it);
+    // the delay of a jittery loop varies from sample to sample.
+    const int spread = options.max_delay_samples - options.delay_samples + 1;
+    const int delay = options.delay_samples + (k * 104729 / 7) % spread;
+    answered = std::max(answered, std::max(0, std::min<int>(k - delay, static_cast<int>(commands.size()) - 1)));
+    const Sent& applied = commands[static_cast<size_t>(answered)];
+    // The driver's ramp, evaluated by the bench at this sample's time.
+    const double ramp_s = std::clamp(static_cast<double>(t_ns - applied.t_ns) * 1e-9, 0.0, max_ramp_s);
+    const ControlVector phi_now = applied.phi + applied.rate * ramp_s;
+    const StokesVector s_out = chain.Output(phi_now, s_in);
     if (k > samples / 2) {
       error_sum_deg += target.DistanceRad(s_out) * 180.0 / M_PI;
       ++counted;
     }
     // The driver's state for that command reaches the controller first.
-    core.OnState(State({applied[0], applied[1], applied[2]}, "me", static_cast<uint64_t>(answered)));
+    msg::WaveplateState state = State({applied.phi[0], applied.phi[1], applied.phi[2]}, "me",
+                                      static_cast<uint64_t>(answered));
+    if (!applied.rate.isZero()) {
+      state.phi_rate_per_s({applied.rate[0], applied.rate[1], applied.rate[2]});
+      state.ramp_start_time_ns(applied.t_ns);
+      state.ramp_end_time_ns(applied.t_ns + static_cast<int64_t>(max_ramp_s * 1e9));
+    }
+    core.OnState(state);
     msg::StokesSample sample = Sample(static_cast<uint64_t>(k), {s_in[0], s_in[1], s_in[2]});
     sample.s_out({s_out[0], s_out[1], s_out[2]});
     sample.sample_time_ns(t_ns);
     const msg::WaveplateCommand* command = core.OnSample(sample, t_ns, t_ns);
     EXPECT_NE(command, nullptr);
     if (command == nullptr) break;
-    commands.emplace_back(Eigen::Map<const ControlVector>(command->phi().data(), 3));
+    Sent sent{Eigen::Map<const ControlVector>(command->phi().data(), 3), ControlVector::Zero(3), t_ns};
+    if (!command->phi_rate_per_s().empty()) {
+      EXPECT_EQ(command->phi_rate_per_s().size(), 3u);
+      sent.rate = Eigen::Map<const ControlVector>(command->phi_rate_per_s().data(), 3);
+    }
+    commands.push_back(sent);
   }
   RealTimeLoopResult result;
   result.mean_error_deg = error_sum_deg / counted;
   result.horizon_s = core.prediction_horizon_s();
   result.condition = core.TakeStatus(t_ns, t_ns, 0).condition().to_string();
+  result.last_rate = commands.back().rate;
   return result;
 }
 
 TEST(ControllerCoreRealTimePredictionTest, MeasuresTheLoopLatencyAndPredictsAcrossIt) {
-  const RealTimeLoopResult plain = RunRealTimeLoop(false, 3);
-  const RealTimeLoopResult predicted = RunRealTimeLoop(true, 3);
+  const RealTimeLoopResult plain = RunRealTimeLoop({});
+  const RealTimeLoopResult predicted = RunRealTimeLoop({.predict = true});
   std::printf("300 rad/s, 3 samples of delay: mean error %.3f° plain, %.4f° predicted (horizon %.1f µs)\n",
               plain.mean_error_deg, predicted.mean_error_deg, predicted.horizon_s * 1e6);
   // The horizon: 3 sample intervals of ~100 µs.
@@ -215,6 +251,79 @@ TEST(ControllerCoreRealTimePredictionTest, MeasuresTheLoopLatencyAndPredictsAcro
   EXPECT_GT(plain.mean_error_deg, 2.0);
   EXPECT_LT(predicted.mean_error_deg, 0.1 * plain.mean_error_deg)
       << "plain " << plain.mean_error_deg << "°, predicted " << predicted.mean_error_deg << "°";
+}
+
+
+// With a loop delay that jitters between 2 and 4 samples no single horizon fits; the rate
+// commands (kRamp) make the delay irrelevant, so the error is far below kLatency's.
+TEST(ControllerCoreRealTimePredictionTest, RateCommandsTrackThroughAJitteringDelay) {
+  const RealTimeLoopResult plain = RunRealTimeLoop({.delay_samples = 2, .max_delay_samples = 4});
+  const RealTimeLoopResult latency = RunRealTimeLoop(
+      {.predict = true, .mode = PredictionMode::kLatency, .delay_samples = 2, .max_delay_samples = 4});
+  const RealTimeLoopResult ramp = RunRealTimeLoop(
+      {.predict = true, .mode = PredictionMode::kRamp, .delay_samples = 2, .max_delay_samples = 4});
+  std::printf("300 rad/s, 2–4 samples of delay: mean error %.3f° plain, %.4f° latency, %.5f° ramp\n",
+              plain.mean_error_deg, latency.mean_error_deg, ramp.mean_error_deg);
+  EXPECT_NE(ramp.condition.find("ramping with the input at 300 rad/s"), std::string::npos) << ramp.condition;
+  // The rate of a 300 rad/s input on θ = πφ stages: of order 300/π per second.
+  ASSERT_EQ(ramp.last_rate.size(), 3);
+  EXPECT_GT(ramp.last_rate.norm(), 10.0);
+  EXPECT_LT(ramp.last_rate.norm(), 1000.0);
+  EXPECT_GT(plain.mean_error_deg, 2.0);
+  EXPECT_LT(ramp.mean_error_deg, 0.25 * latency.mean_error_deg)
+      << "latency " << latency.mean_error_deg << "°, ramp " << ramp.mean_error_deg << "°";
+  EXPECT_LT(ramp.mean_error_deg, 0.15);  // measured 0.092°
+}
+
+// A driver that does not ramp (device description max_ramp_s = 0) gets points: the controller
+// falls back to predicting across the latency.
+TEST(ControllerCoreRealTimePredictionTest, WithoutARampingDriverItSendsNoRate) {
+  ControllerSettings settings = Settings();
+  settings.controller.prediction = PredictionConfig{};
+  ControllerCore core(settings);
+  ASSERT_EQ(core.OnDevice(bus::DescribeDevice(StagesFromAxes("131"), "bench1", "driver", 0.0, 0.0)), "");
+  ASSERT_EQ(core.OnTarget(bus::TargetMessage(TargetConfig{}, "bench1", 1, "")), "");
+  core.OnState(State({0, 0, 0}, "me", 0));
+  const Vector3 axis(0.0, 0.0, 1.0);
+  for (int k = 1; k <= 100; ++k) {
+    const StokesVector s_in = RotationAboutAxis(axis, 0.03 * k) * StokesVector(1.0, 0.0, 0.0);
+    msg::StokesSample sample = Sample(static_cast<uint64_t>(k), {s_in[0], s_in[1], s_in[2]});
+    sample.sample_time_ns(k * 100'000);
+    const msg::WaveplateCommand* command = core.OnSample(sample, k * 100'000, k * 100'000);
+    ASSERT_NE(command, nullptr);
+    EXPECT_TRUE(command->phi_rate_per_s().empty());
+  }
+  EXPECT_NE(core.TakeStatus(0, 0, 0).condition().to_string().find("predicting"), std::string::npos);
+}
+
+// A standby controller follows the applied motion where it is at each sample, so its first
+// obeyed command continues from there.
+TEST(ControllerCoreRealTimePredictionTest, AStandbyFollowsTheRampAtTheSampleTime) {
+  ControllerSettings settings = Settings();
+  settings.controller.step = 1e-9;          // the law's Δφ vanishes: φ shows what it follows
+  settings.controller.nullspace_step = 0.0;
+  ControllerCore core(settings);
+  ASSERT_EQ(core.OnDevice(bus::DescribeDevice(StagesFromAxes("131"), "bench1", "driver", 0.0, 2e-3)), "");
+  ASSERT_EQ(core.OnTarget(bus::TargetMessage(TargetConfig{}, "bench1", 1, "")), "");
+  msg::WaveplateState state = State({0.1, 0.2, 0.3}, "other", 1);
+  state.phi_rate_per_s({10.0, 0.0, -10.0});
+  state.ramp_start_time_ns(1'000'000);
+  state.ramp_end_time_ns(3'000'000);
+  core.OnState(state);
+  msg::StokesSample sample = Sample(2, {1.0, 0.0, 0.0});
+  sample.sample_time_ns(1'500'000);  // 0.5 ms into the ramp
+  ASSERT_NE(core.OnSample(sample, 1'500'000, 1'500'000), nullptr);
+  EXPECT_NEAR(core.phi()[0], 0.105, 1e-6);
+  EXPECT_NEAR(core.phi()[2], 0.295, 1e-6);
+  msg::StokesSample later = Sample(3, {1.0, 0.0, 0.0});
+  later.sample_time_ns(9'000'000);  // after the ramp's end
+  ASSERT_NE(core.OnSample(later, 9'000'000, 9'000'000), nullptr);
+  EXPECT_NEAR(core.phi()[0], 0.12, 1e-6);   // where the ramp stopped
+  EXPECT_NEAR(core.phi()[2], 0.28, 1e-6);
+  // A state with a malformed rate is refused.
+  state.phi_rate_per_s({NAN, 0.0, 0.0});
+  core.OnState(state);
+  EXPECT_NE(core.last_rejection().find("phi_rate_per_s[0]"), std::string::npos) << core.last_rejection();
 }
 
 }  // namespace

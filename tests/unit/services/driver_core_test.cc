@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "dpc/bus/message_conversion.h"
 #include "dpc/config/scenario_config.h"
 
 namespace dpc::services {
@@ -49,7 +50,7 @@ TEST_F(DriverCoreTest, AppliesTheFirstControllersCommandAndAnswersItsSample) {
   EXPECT_EQ(state->obeyed_controller_id().to_string(), "A");
   EXPECT_EQ(state->answers_sample(), 7u);
   EXPECT_EQ(state->phi_applied(), std::vector<double>({0.1, 0.2, 0.3}));
-  EXPECT_EQ(backend_.Applied(), (ControlVector(3) << 0.1, 0.2, 0.3).finished());
+  EXPECT_EQ(backend_.Applied().phi, (ControlVector(3) << 0.1, 0.2, 0.3).finished());
 }
 
 TEST_F(DriverCoreTest, RefusesMalformedCommandsAndNeverAppliesThem) {
@@ -62,9 +63,21 @@ TEST_F(DriverCoreTest, RefusesMalformedCommandsAndNeverAppliesThem) {
   }
   EXPECT_EQ(core_.commands_rejected(), 4u);
   EXPECT_NE(core_.last_rejection().find("oversized"), std::string::npos) << core_.last_rejection();
+  // A bad rate spoils the whole command: neither φ nor the rate is applied.
+  for (const auto& rate : {std::vector<double>{NAN, 0, 0}, std::vector<double>{0, -INFINITY, 0},
+                           std::vector<double>{1.0, 1.0}}) {
+    msg::WaveplateCommand command = Command("A", 0, {0.5, 0.5, 0.5}, 2);
+    command.phi_rate_per_s(rate);
+    auto state = core_.OnCommand(command, 1 * kMs + 10 * kUs, 0);
+    ASSERT_TRUE(state.has_value());
+    EXPECT_EQ(state->phi_applied(), std::vector<double>({0.1, 0.2, 0.3}));
+    EXPECT_TRUE(state->phi_rate_per_s().empty());
+    EXPECT_NE(core_.last_rejection().find("phi_rate_per_s"), std::string::npos) << core_.last_rejection();
+  }
+  EXPECT_EQ(core_.commands_rejected(), 7u);
   // A stranger's bad command is counted too, but not answered.
   EXPECT_FALSE(core_.OnCommand(Command("B", 99, {NAN, 0, 0}, 3), 1 * kMs + 20 * kUs, 0));
-  EXPECT_EQ(core_.commands_rejected(), 5u);
+  EXPECT_EQ(core_.commands_rejected(), 8u);
   EXPECT_EQ(core_.obeyed(), "A");
 }
 
@@ -75,7 +88,7 @@ TEST_F(DriverCoreTest, HigherPriorityTakesOverLowerIsIgnored) {
   EXPECT_EQ(state->obeyed_controller_id().to_string(), "high");
   EXPECT_EQ(state->controller_switches(), 2u);
   EXPECT_FALSE(core_.OnCommand(Command("low", 0, {0.9, 0.9, 0.9}, 2), 1 * kMs + 100 * kUs, 0));
-  EXPECT_EQ(backend_.Applied(), ControlVector::Constant(3, 0.2));
+  EXPECT_EQ(backend_.Applied().phi, ControlVector::Constant(3, 0.2));
 }
 
 TEST_F(DriverCoreTest, FailsOverToTheStandbyWhenTheObeyedControllerFallsSilent) {
@@ -153,6 +166,93 @@ TEST(DriverCoreLimits, LimitsTheSlewOverBenchTime) {
   EXPECT_NEAR(state->phi_applied()[0], 0.01, 1e-12);
   EXPECT_NEAR(state->phi_applied()[1], -0.005, 1e-12);
   EXPECT_EQ(state->saturated(), std::vector<bool>({true, false, false}));
+}
+
+
+msg::WaveplateCommand RampCommand(std::vector<double> phi, std::vector<double> rate, uint64_t sample,
+                                  int64_t sample_time_ns) {
+  msg::WaveplateCommand c = Command("A", 0, std::move(phi), sample, sample_time_ns);
+  c.phi_rate_per_s(std::move(rate));
+  return c;
+}
+
+ControlVector At(const msg::WaveplateState& state, int64_t t_ns) {
+  EXPECT_EQ(bus::CheckStateShape(state, 3), "");
+  bus::AppliedTrajectory motion;
+  bus::ReadTrajectory(state, &motion);
+  ControlVector phi;
+  motion.At(t_ns, &phi);
+  return phi;
+}
+
+TEST_F(DriverCoreTest, ARatedCommandMovesTheWaveplatesFromItsSampleTimeForAtMostTheRampLimit) {
+  // Sample at bench time 10 ms; the command arrives whenever it arrives.
+  auto state = core_.OnCommand(RampCommand({0.1, 0.2, 0.3}, {10.0, 0.0, -5.0}, 1, 10 * kMs), 50 * kMs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->phi_applied(), std::vector<double>({0.1, 0.2, 0.3}));
+  EXPECT_EQ(state->phi_rate_per_s(), std::vector<double>({10.0, 0.0, -5.0}));
+  EXPECT_EQ(state->ramp_start_time_ns(), 10 * kMs);
+  EXPECT_EQ(state->ramp_end_time_ns(), 12 * kMs);  // DriverSettings::max_ramp_s = 2 ms
+  EXPECT_EQ(state->saturated(), std::vector<bool>({false, false, false}));
+  // 300 µs after the sample: 0.1 + 10 × 3e-4.
+  EXPECT_NEAR(At(*state, 10 * kMs + 300 * kUs)[0], 0.103, 1e-12);
+  EXPECT_NEAR(At(*state, 10 * kMs + 300 * kUs)[2], 0.2985, 1e-12);
+  // Before its start the motion has not begun; after its end it stops.
+  EXPECT_NEAR(At(*state, 0)[0], 0.1, 1e-12);
+  EXPECT_NEAR(At(*state, 1000 * kMs)[0], 0.12, 1e-12);
+  // The device description says the driver ramps.
+  DriverSettings settings;
+  EXPECT_GT(bus::DescribeDevice(StagesFromAxes("131"), "b", "d", 0.0, settings.max_ramp_s).max_ramp_s(), 0.0);
+}
+
+TEST_F(DriverCoreTest, HoldingStopsTheMotionWhereItEnds) {
+  ASSERT_TRUE(core_.OnCommand(RampCommand({0.1, 0.2, 0.3}, {10.0, 0.0, -5.0}, 1, 0), 0, 0));
+  auto state = core_.Tick(3 * kMs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->mode(), msg::DRIVER_HOLDING);
+  EXPECT_TRUE(state->phi_rate_per_s().empty());
+  ASSERT_EQ(state->phi_applied().size(), 3u);
+  EXPECT_NEAR(state->phi_applied()[0], 0.12, 1e-12);   // where the 2-ms ramp ended
+  EXPECT_NEAR(state->phi_applied()[2], 0.29, 1e-12);
+  EXPECT_NEAR(backend_.Applied().phi[0], 0.12, 1e-12);
+  EXPECT_FALSE(backend_.Applied().moving);
+}
+
+TEST_F(DriverCoreTest, TheNextCommandStartsFromWhereTheRampHasTheWaveplates) {
+  DriverSettings settings;
+  settings.max_slew_per_s = 20.0;  // 0.002 per 100 µs
+  SimulatedWaveplates backend(ControlVector::Zero(3));
+  DriverCore core(StagesFromAxes("131"), settings, &backend);
+  ASSERT_TRUE(core.OnCommand(RampCommand({0.0, 0.0, 0.0}, {15.0, 0.0, 0.0}, 1, 0), 0, 0));
+  // 100 µs later the ramp has φ0 at 0.0015; a command for 0.004 may step 0.002 from there.
+  auto state = core.OnCommand(RampCommand({0.004, 0.0, 0.0}, {15.0, 0.0, 0.0}, 2, 100 * kUs), 0, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_NEAR(state->phi_applied()[0], 0.0035, 1e-12);
+  EXPECT_EQ(state->saturated(), std::vector<bool>({true, false, false}));
+  // A rate above the slew limit is cut to it.
+  state = core.OnCommand(RampCommand({0.0035, 0.0, 0.0}, {50.0, -50.0, 1.0}, 3, 200 * kUs), 0, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->phi_rate_per_s(), std::vector<double>({20.0, -20.0, 1.0}));
+  EXPECT_EQ(state->saturated(), std::vector<bool>({true, true, false}));
+}
+
+TEST(DriverCoreLimits, ARampStopsAtTheFirstRangeEnd) {
+  std::vector<StageConfig> stages = StagesFromAxes("131");
+  stages[0].range = ControlRange{-0.5, 0.5};
+  stages[1].range = ControlRange{-0.5, 0.5};
+  SimulatedWaveplates backend(ControlVector::Zero(3));
+  DriverCore core(stages, DriverSettings{}, &backend);
+  // Stage 0 reaches 0.5 after 1 ms at 100/s; stage 1 is at its end and pushes out: no rate.
+  auto state = core.OnCommand(RampCommand({0.4, 0.5, 0.0}, {100.0, 3.0, 7.0}, 1, 0), 0, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->phi_rate_per_s(), std::vector<double>({100.0, 0.0, 7.0}));
+  EXPECT_NEAR(state->ramp_end_time_ns(), 1 * kMs, 1);  // rounded down: never past the end
+  EXPECT_EQ(state->saturated(), std::vector<bool>({false, true, false}));
+  const ControlVector later = At(*state, 5 * kMs);
+  EXPECT_LE(later[0], 0.5);
+  EXPECT_NEAR(later[0], 0.5, 1e-6);
+  EXPECT_NEAR(later[1], 0.5, 1e-12);
+  EXPECT_NEAR(later[2], 0.007, 1e-6);
 }
 
 }  // namespace
