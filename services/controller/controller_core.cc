@@ -158,16 +158,10 @@ double ControllerCore::PredictionHorizonS(const msg::StokesSample& sample) {
 }
 
 void ControllerCore::SolveRate(const ControlProblem& problem, const Vector3& omega, ControlVector* rate) {
-  // ω × S_in: how the input moves (rad/s, input frame); the task must not see it.
-  const Vector3 motion = omega.cross(problem.s_in);
-  TaskVector velocity(problem.task_jacobian.rows());
-  if (target_->is_point()) {
-    velocity[0] = -problem.tangent_e1.dot(motion);
-    velocity[1] = -problem.tangent_e2.dot(motion);
-  } else {
-    const Vector3 normal_in = problem.kinematics.mueller.transpose() * target_->normal();
-    velocity[0] = -normal_in.dot(motion);
-  }
+  // The input moves by ω × S_in (rad/s, input frame); φ̇ must cancel what that does to the
+  // task: T φ̇ = the rate of the task error it causes (−Eᵀ(ω × S_in) for a point target).
+  TaskVector velocity;
+  TaskErrorChangeOfInput(problem, omega.cross(problem.s_in), &velocity);
   const SingularityDampingConfig damping =
       settings_.controller.singularity_damping.value_or(SingularityDampingConfig{});
   rate_solver_.ComputeDamped(problem.task_jacobian, damping.max_damping, damping.threshold);
@@ -257,23 +251,15 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
   }
   chain_->ComputePose(integrator_->phi(), &pose_);
   problem_.pose = &pose_;
-  if (ramp) {
-    // The measured input (horizon 0); the predictor fits the rotation for the rate, and the
-    // measured latency tells how far the ramp reaches before the command acts.
-    if (compensator_->predictor().samples() == 0) time_origin_ns_ = t_ns;
+  if (compensator_) {
     sample_times_ns_[sample.sequence_number() % kSampleTimeRing] = {sample.sequence_number(), t_ns};
     horizon_s_ = PredictionHorizonS(sample);
+    if (compensator_->predictor().samples() == 0) time_origin_ns_ = t_ns;
+    // Rate commands take the measured input (horizon 0: the latest sample itself) and use the
+    // horizon only for the rate's midpoint; otherwise the law aims at the prediction.
     problem_.s_in = compensator_->PredictAt(bus::ToStokes(sample.s_in()),
-                                            static_cast<double>(t_ns - time_origin_ns_) * 1e-9, 0.0);
-    // (PredictAt with horizon 0 returns the latest sample itself.)
-  } else if (compensator_) {
-    sample_times_ns_[sample.sequence_number() % kSampleTimeRing] = {sample.sequence_number(),
-                                                                    sample.sample_time_ns()};
-    horizon_s_ = PredictionHorizonS(sample);
-    if (compensator_->predictor().samples() == 0) time_origin_ns_ = sample.sample_time_ns();
-    problem_.s_in = compensator_->PredictAt(
-        bus::ToStokes(sample.s_in()), static_cast<double>(sample.sample_time_ns() - time_origin_ns_) * 1e-9,
-        horizon_s_);
+                                            static_cast<double>(t_ns - time_origin_ns_) * 1e-9,
+                                            ramp ? 0.0 : horizon_s_);
   } else {
     problem_.s_in = bus::ToStokes(sample.s_in());
   }

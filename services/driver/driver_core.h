@@ -21,10 +21,10 @@
 // now, whatever the loop's delay and its jitter. The motion is bounded: it stops after
 // max_ramp_s (the next command normally replaces it long before), or when the first stage
 // reaches its range end (a stage already at its end with φ̇ pointing out gets no rate), and
-// |φ̇| ≤ max_slew_per_s.
-// Holding turns the motion into the point where it ends, with no rate. Bumpless switching is the controllers' part: a standby
-// controller follows the applied φ from the state, so its first obeyed command continues from
-// there.
+// |φ̇| ≤ max_slew_per_s. Holding turns the motion into the point where it ends, with no rate.
+//
+// Bumpless switching is the controllers' part: a standby controller follows the applied φ from
+// the state, so its first obeyed command continues from there.
 
 #include <cstdint>
 #include <map>

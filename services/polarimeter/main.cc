@@ -78,11 +78,7 @@ class DdsBenchLink final : public BenchLink {
   bool TakeApplied(bus::AppliedTrajectory* motion) override {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!latest_fresh_) return false;
-    motion->phi = latest_.phi;
-    motion->rate_per_s = latest_.rate_per_s;
-    motion->start_ns = latest_.start_ns;
-    motion->end_ns = latest_.end_ns;
-    motion->moving = latest_.moving;
+    *motion = latest_;  // ControlVector has fixed storage: copying allocates nothing
     latest_fresh_ = false;
     return true;
   }

@@ -82,6 +82,25 @@ bool AllFinite(const Array& values) {
   return true;
 }
 
+
+/// Empty if every value is finite; else the first that is not, as "field[i] = v is not finite".
+std::string CheckFinite(const std::vector<double>& values, const char* field) {
+  for (size_t i = 0; i < values.size(); ++i) {
+    if (!std::isfinite(values[i])) return fmt::format("{}[{}] = {} is not finite", field, i, values[i]);
+  }
+  return {};
+}
+
+/// Empty if `rates` (phi_rate_per_s of a command or a state) is empty (φ holds) or has one
+/// finite value per control.
+std::string CheckRates(const std::vector<double>& rates, size_t controls) {
+  if (!rates.empty() && rates.size() != controls) {
+    return fmt::format("phi_rate_per_s has {} values, the device has {} controls (or none: φ holds)",
+                       rates.size(), controls);
+  }
+  return CheckFinite(rates, "phi_rate_per_s");
+}
+
 }  // namespace
 
 std::string CheckUnitStokes(const std::array<double, 3>& s, const char* field) {
@@ -117,22 +136,8 @@ std::string CheckCommandShape(const msg::WaveplateCommand& command, int control_
   if (count != static_cast<size_t>(control_count)) {
     return fmt::format("phi has {} values, the device has {} controls", count, control_count);
   }
-  for (size_t i = 0; i < count; ++i) {
-    if (!std::isfinite(command.phi()[i])) {
-      return fmt::format("phi[{}] = {} is not finite", i, command.phi()[i]);
-    }
-  }
-  const size_t rates = command.phi_rate_per_s().size();
-  if (rates != 0 && rates != count) {
-    return fmt::format("phi_rate_per_s has {} values, the device has {} controls (or none: φ holds)",
-                       rates, control_count);
-  }
-  for (size_t i = 0; i < rates; ++i) {
-    if (!std::isfinite(command.phi_rate_per_s()[i])) {
-      return fmt::format("phi_rate_per_s[{}] = {} is not finite", i, command.phi_rate_per_s()[i]);
-    }
-  }
-  return {};
+  if (std::string reason = CheckFinite(command.phi(), "phi"); !reason.empty()) return reason;
+  return CheckRates(command.phi_rate_per_s(), count);
 }
 
 std::string CheckStateShape(const msg::WaveplateState& state, int control_count) {
@@ -141,22 +146,9 @@ std::string CheckStateShape(const msg::WaveplateState& state, int control_count)
     return fmt::format("phi_applied has {} values, the device has {} controls",
                        state.phi_applied().size(), controls);
   }
-  for (size_t i = 0; i < controls; ++i) {
-    if (!std::isfinite(state.phi_applied()[i])) {
-      return fmt::format("phi_applied[{}] = {} is not finite", i, state.phi_applied()[i]);
-    }
-  }
-  const size_t rates = state.phi_rate_per_s().size();
-  if (rates != 0 && rates != controls) {
-    return fmt::format("phi_rate_per_s has {} values, the device has {} controls (or none)", rates,
-                       controls);
-  }
-  for (size_t i = 0; i < rates; ++i) {
-    if (!std::isfinite(state.phi_rate_per_s()[i])) {
-      return fmt::format("phi_rate_per_s[{}] = {} is not finite", i, state.phi_rate_per_s()[i]);
-    }
-  }
-  if (rates != 0 && state.ramp_end_time_ns() < state.ramp_start_time_ns()) {
+  if (std::string reason = CheckFinite(state.phi_applied(), "phi_applied"); !reason.empty()) return reason;
+  if (std::string reason = CheckRates(state.phi_rate_per_s(), controls); !reason.empty()) return reason;
+  if (!state.phi_rate_per_s().empty() && state.ramp_end_time_ns() < state.ramp_start_time_ns()) {
     return fmt::format("ramp_end_time_ns {} is before ramp_start_time_ns {}", state.ramp_end_time_ns(),
                        state.ramp_start_time_ns());
   }

@@ -63,6 +63,23 @@ struct ControlProblem {
 /// loop mode, and builds the reduced task. The inputs must be set.
 void UpdateControlProblem(ControlProblem* problem);
 
+/// Real-time. The change of the task error when the input SOP moves by `ds_in` (input frame)
+/// with φ fixed, to first order: −A·ds_in, A the error's linear map of S_in (Eᵀ for a point
+/// target, (Mᵀn)ᵀ for a set). After UpdateControlProblem. Used for the delay compensator's
+/// lead and for the rate that cancels a moving input (the DDS controller's rate commands).
+inline void TaskErrorChangeOfInput(const ControlProblem& problem, const Vector3& ds_in, TaskVector* out) {
+  if (problem.target->is_point()) {
+    // e = Eᵀ(MᵀS* − S_in).
+    out->resize(2);
+    (*out)[0] = -problem.tangent_e1.dot(ds_in);
+    (*out)[1] = -problem.tangent_e2.dot(ds_in);
+  } else {
+    // e = c − n·(M S_in).
+    out->resize(1);
+    (*out)[0] = -(problem.kinematics.mueller.transpose() * problem.target->normal()).dot(ds_in);
+  }
+}
+
 /// Real-time. The task Jacobian of `target` for kinematics `k` evaluated at input `s_in`, with
 /// (e1, e2) the tangent basis at s_in (TangentBasis).
 void BuildTaskJacobian(const Target& target, const ChainKinematics& k, const StokesVector& s_in,

@@ -89,16 +89,9 @@ inline const StokesVector& DelayCompensator::Keep(const StokesVector& prediction
 
 inline void DelayCompensator::AddLead(ControlProblem* problem) const {
   if (lead_samples_ == 0.0) return;
-  const Vector3 motion = current_ - previous_;
-  if (problem->target->is_point()) {
-    // e = Eᵀ(MᵀS* − S_in): m = −Eᵀ·motion.
-    problem->task_error[0] -= lead_samples_ * problem->tangent_e1.dot(motion);
-    problem->task_error[1] -= lead_samples_ * problem->tangent_e2.dot(motion);
-  } else {
-    // e = c − n·(M S_in): m = −(Mᵀn)·motion.
-    const Vector3 normal_in = problem->kinematics.mueller.transpose() * problem->target->normal();
-    problem->task_error[0] -= lead_samples_ * normal_in.dot(motion);
-  }
+  TaskVector change;
+  TaskErrorChangeOfInput(*problem, current_ - previous_, &change);
+  problem->task_error += lead_samples_ * change;
 }
 
 }  // namespace dpc
