@@ -6,14 +6,20 @@
 //   dpc_bus_benchmark --quick    the same figures from short runs (~3 min)
 //
 // Sections:
-//   raw      ping-pong: StokesSample out, WaveplateState back, the bench's QoS profiles, between
-//            two processes; one hop = round trip / 2; back to back (the reference for
-//            lockstep) and paced at 1 kHz (the reference for the real-time loop at 1 kHz)
+//   raw      (alone) the raw references: a ping-pong, StokesSample out, WaveplateState back,
+//            the bench's QoS profiles, between two processes, one hop = round trip / 2; and a
+//            three-process chain, sample → relay (→ command) → echo (→ state), one hop =
+//            (sample → command at the echo) / 2; back to back and paced at 1 kHz
 //   loop     lockstep bench, then real time at 1 kHz: sample published → command received at
 //            the driver (two hops: polarimeter → controller → driver, plus the controller's
-//            update) and → state published; per hop = (sample → command at the driver) / 2
+//            update), → state published, → state back at the bench (the polarimeter's own
+//            report, bench.loop_latency_us); per hop = (sample → command at the driver) / 2;
+//            in rounds that alternate with both raw references (back to back for lockstep,
+//            paced at the same rate for real time), each on a domain of its own; medians over
+//            the rounds
 //   rate     real time at 5, 10, 15, 20 kHz: overruns and missed deadlines over the run; the
-//            raw reference: samples paced at the same rate, echoed by a second process
+//            raw references: samples paced at the same rate, echoed by a second process, and
+//            relayed through the three-process chain
 //   failover kill -9 of the obeyed controller with a standby: gap between the last command of
 //            the killed one and the first of the standby applied by the driver; the raw DDS
 //            reference: kill -9 of the stronger of two EXCLUSIVE-ownership writers
@@ -108,20 +114,9 @@ class Services {
 };
 
 
-// ---- raw ping-pong -------------------------------------------------------------------------
+// ---- raw references ------------------------------------------------------------------------
 
-int RunPong() {
-  bus::BusParticipant participant({g_domain, "dpc-bench-pong"});
-  auto writer = participant.MakeWriter<msg::WaveplateState>();
-  msg::WaveplateState reply;
-  reply.phi_applied({0.0, 0.0, 0.0});
-  reply.saturated({false, false, false});
-  auto reader = participant.MakeReader<msg::StokesSample>("", [&](const msg::StokesSample& s, const auto&) {
-    reply.bench_id(s.bench_id());
-    reply.answers_sample(s.sequence_number());
-    reply.sample_publish_time_ns(s.publish_time_ns());
-    writer->Write(reply);
-  });
+void WaitForStopSignal() {
   sigset_t set;
   sigemptyset(&set);
   sigaddset(&set, SIGINT);
@@ -129,58 +124,162 @@ int RunPong() {
   pthread_sigmask(SIG_BLOCK, &set, nullptr);
   int sig = 0;
   sigwait(&set, &sig);
+}
+
+/// A process of a raw reference: each `In` received is answered by `reply`, filled by `fill`.
+template <typename In, typename Out, typename Fill>
+int RunEcho(const char* name, Out reply, Fill fill) {
+  bus::BusParticipant participant({g_domain, name});
+  auto writer = participant.MakeWriter<Out>();
+  auto reader = participant.MakeReader<In>("", [&](const In& in, const auto&) {
+    fill(in, &reply);
+    writer->Write(reply);
+  });
+  WaitForStopSignal();
   reader.reset();
   return 0;
 }
 
-/// `pace_hz` > 0: one ping per period (absolute sleeps, like the real-time polarimeter), so the
-/// processes sleep between samples as the bench's do; 0: back to back.
-Percentiles RawPingPong(const std::string& self, int count, double pace_hz) {
-  sigset_t set;
-  ChildProcess pong({self, "--pong", "--domain", std::to_string(g_domain)}, g_dir + "/pong.log");
-  bus::BusParticipant participant({g_domain, "dpc-bench-ping"});
-  auto writer = participant.MakeWriter<msg::StokesSample>();
-  std::mutex mutex;
-  std::condition_variable answered;
-  uint64_t last_answer = 0;
-  std::vector<double> rtt_ns;
-  auto reader = participant.MakeReader<msg::WaveplateState>("", [&](const msg::WaveplateState& s, const auto&) {
-    const int64_t now = bus::WallClockNs();
-    std::lock_guard<std::mutex> lock(mutex);
-    if (s.answers_sample() > last_answer) {
-      last_answer = s.answers_sample();
-      rtt_ns.push_back(static_cast<double>(now - s.sample_publish_time_ns()));
-      answered.notify_one();
-    }
+/// The echo of the raw ping-pong: each StokesSample answered by a WaveplateState.
+int RunPong() {
+  msg::WaveplateState state;
+  state.phi_applied({0.0, 0.0, 0.0});
+  state.saturated({false, false, false});
+  return RunEcho<msg::StokesSample>("dpc-bench-pong", state, [](const msg::StokesSample& s, msg::WaveplateState* r) {
+    r->bench_id(s.bench_id());
+    r->answers_sample(s.sequence_number());
+    r->sample_publish_time_ns(s.publish_time_ns());
   });
-  WaitUntil([&] { return writer->matched_readers() > 0 && reader->counters().matched_writers.load() > 0; }, 20s);
-  std::this_thread::sleep_for(200ms);
-  msg::StokesSample sample;
-  sample.bench_id("bench1");
-  sample.s_in({1, 0, 0});
-  sample.s_out({1, 0, 0});
-  prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
-  const int64_t period_ns = pace_hz > 0.0 ? static_cast<int64_t>(1e9 / pace_hz) : 0;
-  int64_t next_ns = bus::MonotonicNs();
-  for (int i = 1; i <= count; ++i) {
-    if (period_ns > 0) {
-      next_ns += period_ns;
-      const timespec ts{static_cast<time_t>(next_ns / 1000000000), static_cast<long>(next_ns % 1000000000)};
-      while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-      }
-    }
-    sample.sequence_number(static_cast<uint64_t>(i));
-    sample.publish_time_ns(bus::WallClockNs());
-    writer->Write(sample);
-    std::unique_lock<std::mutex> lock(mutex);
-    answered.wait_for(lock, 100ms, [&] { return last_answer >= static_cast<uint64_t>(i); });
-  }
-  reader.reset();
-  (void)set;
-  std::vector<double> hops;
-  for (double r : rtt_ns) hops.push_back(r / 2.0);
-  return Summarize(hops);
 }
+
+/// The middle of the raw three-process chain, a controller without a law: each StokesSample
+/// relayed as a WaveplateCommand.
+int RunRelay() {
+  msg::WaveplateCommand command;
+  command.controller_id("relay");
+  command.phi({0.0, 0.0, 0.0});
+  return RunEcho<msg::StokesSample>("dpc-bench-relay", command, [](const msg::StokesSample& s, msg::WaveplateCommand* c) {
+    c->bench_id(s.bench_id());
+    c->sequence_number(s.sequence_number());
+    c->answers_sample(s.sequence_number());
+    c->sample_publish_time_ns(s.publish_time_ns());
+    c->publish_time_ns(bus::WallClockNs());
+  });
+}
+
+/// The end of the raw chain, a driver without checks: each WaveplateCommand answered by a
+/// WaveplateState that carries its arrival time.
+int RunCommandEcho() {
+  msg::WaveplateState state;
+  state.phi_applied({0.0, 0.0, 0.0});
+  state.saturated({false, false, false});
+  return RunEcho<msg::WaveplateCommand>("dpc-bench-command-echo", state,
+                                        [](const msg::WaveplateCommand& c, msg::WaveplateState* r) {
+                                          r->command_receive_time_ns(bus::WallClockNs());
+                                          r->bench_id(c.bench_id());
+                                          r->answers_sample(c.answers_sample());
+                                          r->sample_publish_time_ns(c.sample_publish_time_ns());
+                                        });
+}
+
+/// The far side of a raw reference on `domain`: the ping-pong's echo, or the chain's relay and
+/// command echo (logs <name><log_suffix>.log).
+std::vector<std::unique_ptr<ChildProcess>> StartEchoes(const std::string& self, int domain, bool chain,
+                                                       const std::string& log_suffix) {
+  std::vector<std::unique_ptr<ChildProcess>> echoes;
+  for (const char* role : chain ? std::vector<const char*>{"relay", "command-echo"} : std::vector<const char*>{"pong"}) {
+    echoes.push_back(std::make_unique<ChildProcess>(
+        std::vector<std::string>{self, std::string("--") + role, "--domain", std::to_string(domain)},
+        g_dir + "/" + role + log_suffix + ".log"));
+  }
+  return echoes;
+}
+
+/// A raw reference, kept for several rounds so that its blocks alternate with the bench's:
+/// this process publishes StokesSample and takes WaveplateState back.
+///  - ping-pong (the goal's reference): one echo process (`--pong`); one hop = round trip / 2;
+///  - chain (the bench's topology, three processes on two cores): a relay (`--relay`, sample →
+///    command) and an echo (`--command-echo`, command → state, stamped at the command's
+///    arrival); one hop = (sample published → command received) / 2, as for the bench.
+class RawReference {
+ public:
+  RawReference(const std::string& self, int domain, bool chain = false)
+      : chain_(chain), participant_({domain, chain ? "dpc-bench-chain" : "dpc-bench-ping"}) {
+    children_ = StartEchoes(self, domain, chain, "");
+    writer_ = participant_.MakeWriter<msg::StokesSample>();
+    reader_ = participant_.MakeReader<msg::WaveplateState>("", [this](const msg::WaveplateState& s, const auto&) {
+      const int64_t now = bus::WallClockNs();
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (s.answers_sample() > last_answer_) {
+        last_answer_ = s.answers_sample();
+        const int64_t span_ns = chain_ ? s.command_receive_time_ns() - s.sample_publish_time_ns()
+                                       : now - s.sample_publish_time_ns();
+        hops_ns_.push_back(static_cast<double>(span_ns) / 2.0);
+        answered_.notify_one();
+      }
+    });
+    // The chain is complete when a probe comes back.
+    WaitUntil([&] { return writer_->matched_readers() > 0 && reader_->counters().matched_writers.load() > 0; }, 20s);
+    std::this_thread::sleep_for(200ms);
+    if (chain) {
+      WaitUntil([&] {
+        Run(1, 0.0);
+        std::lock_guard<std::mutex> lock(mutex_);
+        return !hops_ns_.empty();
+      }, 20s);
+    }
+  }
+  ~RawReference() { reader_.reset(); }
+
+  /// `count` pings. `pace_hz` > 0: one ping per period (absolute
+  /// sleeps, like the real-time polarimeter), so the processes sleep between samples as the
+  /// bench's do; 0: back to back.
+  std::vector<double> Run(int count, double pace_hz) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      hops_ns_.clear();
+    }
+    msg::StokesSample sample;
+    sample.bench_id("bench1");
+    sample.s_in({1, 0, 0});
+    sample.s_out({1, 0, 0});
+    prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
+    const int64_t period_ns = pace_hz > 0.0 ? static_cast<int64_t>(1e9 / pace_hz) : 0;
+    int64_t next_ns = bus::MonotonicNs();
+    for (int i = 1; i <= count; ++i) {
+      if (period_ns > 0) {
+        next_ns += period_ns;
+        const timespec ts{static_cast<time_t>(next_ns / 1000000000), static_cast<long>(next_ns % 1000000000)};
+        while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+        }
+      }
+      const uint64_t sequence = ++sequence_;
+      sample.sequence_number(sequence);
+      sample.publish_time_ns(bus::WallClockNs());
+      writer_->Write(sample);
+      std::unique_lock<std::mutex> lock(mutex_);
+      answered_.wait_for(lock, 100ms, [&] { return last_answer_ >= sequence; });
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    return hops_ns_;
+  }
+
+ private:
+  bool chain_;
+  std::vector<std::unique_ptr<ChildProcess>> children_;
+  bus::BusParticipant participant_;
+  std::unique_ptr<bus::Writer<msg::StokesSample>> writer_;
+  std::unique_ptr<bus::Reader<msg::WaveplateState>> reader_;
+  std::mutex mutex_;
+  std::condition_variable answered_;
+  uint64_t last_answer_ = 0;
+  uint64_t sequence_ = 0;
+  std::vector<double> hops_ns_;
+};
+
+/// The raw references' own domains (1: ping-pong, 2: chain): an echo must not answer the
+/// bench's samples or another reference's.
+int RawDomain(int which = 1) { return g_domain + which <= 232 ? g_domain + which : g_domain - which; }
 
 // ---- observing the bench -------------------------------------------------------------------
 
@@ -208,49 +307,128 @@ struct StateLog {
   }
 };
 
-/// `lockstep`: each sample waits for the state answering the previous one (the answer to a
-/// sample and the next sample reach the controller together); otherwise real time at
-/// `rate_hz`, where at a low rate nothing overlaps.
-void LoopLatency(double seconds, const Percentiles& raw, bool lockstep, double rate_hz) {
-  StateLog log;
+/// The bench's hops beside the raw ones, in `rounds` alternating blocks (bench then raw, raw
+/// then bench, …): on a shared VM the raw hop alone drifts by tens of percent from one minute
+/// to the next, more than the difference being measured, so each ratio compares blocks run
+/// seconds apart; the figures are the medians over the rounds. The bench's spans come from
+/// the polarimeter's own report (bench.loop_latency_us: from the states it receives anyway),
+/// so no extra observer takes a share of the two cores. `lockstep`: each sample waits for the
+/// state answering the previous one (the answer to a sample and the next sample reach the
+/// controller together), the raw reference back to back; otherwise real time at `rate_hz`
+/// (nothing overlaps at a low rate), the raw reference paced at the same rate.
+void LoopLatency(const std::string& self, int rounds, double seconds_per_round, bool lockstep, double rate_hz) {
   Services services;
   services.Driver();
   services.Controller("A", 0);
-  if (!lockstep) std::this_thread::sleep_for(1s);  // let the controller match first
-  ChildProcess& polarimeter = services.Polarimeter(
-      lockstep ? std::vector<std::string>{"--lockstep", "--duration-s", fmt::format("{}", seconds), "--json"}
-               : std::vector<std::string>{"--rate-hz", fmt::format("{}", rate_hz), "--run-s",
-                                          fmt::format("{}", seconds), "--json"});
-  polarimeter.Wait(std::chrono::seconds(static_cast<int64_t>(600)));
-  std::vector<double> to_driver, to_state;
-  {
-    std::lock_guard<std::mutex> lock(log.mutex);
-    uint64_t previous = 0;
-    for (const auto& s : log.states) {
-      // Only states of newly applied commands: the driver's switch and hold notices repeat the
-      // last command's times.
-      if (s.answers_sample() == 0 || s.sample_publish_time_ns() == 0 || s.answers_sample() == previous) continue;
-      previous = s.answers_sample();
-      to_driver.push_back(static_cast<double>(s.command_receive_time_ns() - s.sample_publish_time_ns()));
-      to_state.push_back(static_cast<double>(s.publish_time_ns() - s.sample_publish_time_ns()));
-    }
-  }
-  std::vector<double> per_hop;
-  for (double v : to_driver) per_hop.push_back(v / 2.0);
-  const Percentiles hop = Summarize(per_hop);
-  const nlohmann::json report = LastJsonLine(polarimeter.Log());
+  RawReference raw(self, RawDomain(1));
+  RawReference chain(self, RawDomain(2), true);
+  std::this_thread::sleep_for(1s);  // let the controller match the driver first
+  struct Round {
+    Percentiles to_driver, to_state, loop, hop, raw, chain;
+    double ratio = NAN;
+    double achieved_hz = NAN;
+  };
+  std::vector<Round> results;
   if (lockstep) {
-    fmt::print("loop, lockstep ({:.0f} samples/s across the three processes)\n",
-               report.is_object() ? report["bench"]["achieved_rate_hz"].get<double>() : NAN);
+    fmt::print("loop, lockstep, {} rounds of {:.1f} s of bench time, each beside a raw back-to-back block\n", rounds,
+               seconds_per_round);
   } else {
-    fmt::print("loop, real time at {:.0f} Hz\n", rate_hz);
+    fmt::print("loop, real time at {:.0f} Hz, {} rounds of {:.1f} s, each beside a raw block paced at {:.0f} Hz\n",
+               rate_hz, rounds, seconds_per_round, rate_hz);
   }
-  fmt::print("  sample → command at driver      {}\n", Us(Summarize(to_driver)));
-  fmt::print("  sample → state published        {}\n", Us(Summarize(to_state)));
+  auto span = [](const nlohmann::json& j, double scale) {
+    Percentiles p;
+    if (!j.is_object() || j["p50"].is_null()) return p;
+    p.count = j["count"].get<size_t>();
+    p.p50 = j["p50"].get<double>() * 1e3 * scale;
+    p.p99 = j["p99"].get<double>() * 1e3 * scale;
+    p.p999 = j["p999"].get<double>() * 1e3 * scale;
+    p.max = j["max"].get<double>() * 1e3 * scale;
+    return p;
+  };
+  for (int round = 0; round < rounds; ++round) {
+    Round result;
+    auto run_bench = [&] {
+      const std::string seconds = fmt::format("{}", seconds_per_round);
+      ChildProcess& polarimeter = services.Polarimeter(
+          lockstep ? std::vector<std::string>{"--lockstep", "--duration-s", seconds, "--json"}
+                   : std::vector<std::string>{"--rate-hz", fmt::format("{}", rate_hz), "--run-s", seconds, "--json"});
+      polarimeter.Wait(std::chrono::seconds(static_cast<int64_t>(600)));
+      const nlohmann::json report = LastJsonLine(polarimeter.Log());
+      if (!report.is_object()) return;
+      result.achieved_hz = report["bench"]["achieved_rate_hz"].get<double>();
+      const nlohmann::json& latency = report["bench"]["loop_latency_us"];
+      result.to_driver = span(latency["sample_to_command_at_driver"], 1.0);
+      result.to_state = span(latency["sample_to_state_published"], 1.0);
+      result.loop = span(latency["sample_to_state_received"], 1.0);
+      result.hop = span(latency["sample_to_command_at_driver"], 0.5);
+    };
+    auto run_raw = [&] {
+      const int count = lockstep ? std::max<int>(1000, static_cast<int>(seconds_per_round * 4000))
+                                 : static_cast<int>(seconds_per_round * rate_hz);
+      result.raw = Summarize(raw.Run(count, lockstep ? 0.0 : rate_hz));
+      result.chain = Summarize(chain.Run(count, lockstep ? 0.0 : rate_hz));
+    };
+    if (round % 2 == 0) {
+      run_bench();
+      run_raw();
+    } else {
+      run_raw();
+      run_bench();
+    }
+    result.ratio = result.hop.p50 / result.raw.p50;
+    fmt::print("  round {}: per hop p50 {:6.1f} µs (n = {}), raw hop p50 {:6.1f} µs (n = {}): ratio {:.2f}; "
+               "raw chain hop p50 {:6.1f} µs\n",
+               round + 1, result.hop.p50 * 1e-3, result.hop.count, result.raw.p50 * 1e-3, result.raw.count,
+               result.ratio, result.chain.p50 * 1e-3);
+    std::fflush(stdout);
+    results.push_back(result);
+  }
+  services.StopAll();
+  // The median over the rounds of each figure.
+  auto median = [&](auto field) {
+    std::vector<double> v;
+    for (const Round& r : results) {
+      if (std::isfinite(field(r))) v.push_back(field(r));
+    }
+    if (v.empty()) return static_cast<double>(NAN);
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  auto medians = [&](auto member) {
+    Percentiles p;
+    p.p50 = median([&](const Round& r) { return (r.*member).p50; });
+    p.p99 = median([&](const Round& r) { return (r.*member).p99; });
+    p.p999 = median([&](const Round& r) { return (r.*member).p999; });
+    for (const Round& r : results) p.count += (r.*member).count;
+    return p;
+  };
+  const Percentiles hop = medians(&Round::hop), reference = medians(&Round::raw),
+                    chained = medians(&Round::chain);
+  fmt::print("  medians over the rounds:\n");
+  if (lockstep) {
+    fmt::print("  lockstep rate                   {:.0f} samples/s across the three processes (with the wait for "
+               "the first answer)\n",
+               median([](const Round& r) { return r.achieved_hz; }));
+  }
+  fmt::print("  sample → command at driver      {}\n", Us(medians(&Round::to_driver)));
+  fmt::print("  sample → state published        {}\n", Us(medians(&Round::to_state)));
+  fmt::print("  sample → state at the bench     {}\n", Us(medians(&Round::loop)));
   fmt::print("  per hop (→ driver / 2)          {}\n", Us(hop));
-  fmt::print("  raw Fast DDS hop ({})   {}\n", lockstep ? "back to back" : "paced 1 kHz ", Us(raw));
+  fmt::print("  raw Fast DDS hop ({})   {}\n", lockstep ? "back to back" : fmt::format("paced {:.0f} Hz", rate_hz), Us(reference));
   fmt::print("  ratio per hop / raw hop         p50 {:.2f}  p99 {:.2f}  p99.9 {:.2f}   (goal ≤ 1.1)\n",
-             hop.p50 / raw.p50, hop.p99 / raw.p99, hop.p999 / raw.p999);
+             hop.p50 / reference.p50, hop.p99 / reference.p99, hop.p999 / reference.p999);
+  fmt::print("  raw three-process chain hop       {}\n", Us(chained));
+  fmt::print("  ratio per hop / raw chain hop   p50 {:.2f}  p99 {:.2f}  p99.9 {:.2f}   (the bench's topology: "
+             "sample → relay → echo, no law, no checks)\n",
+             hop.p50 / chained.p50, hop.p99 / chained.p99, hop.p999 / chained.p999);
+  const double median_ratio = median([](const Round& r) { return r.ratio; });
+  double lowest = INFINITY, highest = -INFINITY;
+  for (const Round& r : results) {
+    lowest = std::min(lowest, r.ratio);
+    highest = std::max(highest, r.ratio);
+  }
+  fmt::print("  ratio of the p50s, round by round: median {:.2f}, range {:.2f}–{:.2f}\n", median_ratio, lowest, highest);
 }
 
 
@@ -261,10 +439,11 @@ struct RawRateResult {
 };
 
 /// The raw reference for the real-time rate: StokesSample paced at `rate_hz` (absolute sleeps,
-/// late periods counted as the polarimeter does), each echoed as a WaveplateState by a second
-/// process, without waiting for the echoes.
-RawRateResult RawRate(const std::string& self, double rate_hz, double seconds) {
-  ChildProcess pong({self, "--pong", "--domain", std::to_string(g_domain)}, g_dir + "/pong_rate.log");
+/// late periods counted as the polarimeter does), each answered by a WaveplateState from a
+/// second process (`chain`: through the relay and the command echo), without waiting for the
+/// answers.
+RawRateResult RawRate(const std::string& self, double rate_hz, double seconds, bool chain) {
+  const auto echoes = StartEchoes(self, g_domain, chain, "_rate");
   bus::BusParticipant participant({g_domain, "dpc-bench-rate"});
   auto writer = participant.MakeWriter<msg::StokesSample>();
   std::atomic<uint64_t> answers{0};
@@ -326,10 +505,14 @@ void Rates(double seconds, const std::string& self) {
                rate, b["achieved_rate_hz"].get<double>(), b["overruns"].get<int64_t>(),
                b["state_deadline_misses"].get<int64_t>(), r["error_deg"]["mean"].is_null() ? NAN : r["error_deg"]["mean"].get<double>());
     services.StopAll();
-    const RawRateResult raw = RawRate(self, rate, seconds);
+    const RawRateResult raw = RawRate(self, rate, seconds, false);
     fmt::print("          raw DDS (sample out, echo back, same QoS): achieved {:8.1f} Hz, {} late periods, "
                "{:.1f} % echoed\n",
                raw.achieved_hz, raw.late_periods, 100.0 * raw.answered_fraction);
+    const RawRateResult chain = RawRate(self, rate, seconds, true);
+    fmt::print("          raw DDS chain (sample → relay → echo, three processes): achieved {:8.1f} Hz, {} late "
+               "periods, {:.1f} % answered\n",
+               chain.achieved_hz, chain.late_periods, 100.0 * chain.answered_fraction);
   }
 }
 
@@ -604,30 +787,37 @@ int main(int argc, char** argv) {
   std::string only;
   app.add_flag("--quick", quick, "Short runs (~3 min) instead of the full ones (~20 min)");
   app.add_flag("--pong", pong, "(internal) the echo side of the raw ping-pong");
+  bool relay = false, command_echo = false;
+  app.add_flag("--relay", relay, "(internal) the middle of the raw chain: sample → command");
+  app.add_flag("--command-echo", command_echo, "(internal) the end of the raw chain: command → state");
   int raw_owner = 0;
   app.add_option("--raw-owner", raw_owner, "(internal) a raw EXCLUSIVE writer of this strength");
   app.add_option("--domain", dpc::g_domain, "DDS domain (loopback profile)")->check(CLI::Range(0, 232));
   app.add_option("--only", only, "One section: raw,loop,rate,failover,tracking,memory");
   CLI11_PARSE(app, argc, argv);
   if (pong) return dpc::RunPong();
+  if (relay) return dpc::RunRelay();
+  if (command_echo) return dpc::RunCommandEcho();
   if (raw_owner > 0) return dpc::RunRawOwner(raw_owner, 10000.0);
   dpc::g_dir = std::filesystem::temp_directory_path().string() + "/dpc_bus_benchmark_" + std::to_string(getpid());
   std::filesystem::create_directories(dpc::g_dir);
   fmt::print("dpc_bus_benchmark: domain {}, logs in {}{}\n", dpc::g_domain, dpc::g_dir, quick ? " (quick)" : "");
   auto want = [&](const char* s) { return only.empty() || only == s; };
   const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
-  dpc::Percentiles raw, raw_paced;
-  if (want("raw") || want("loop")) {
-    raw = dpc::RawPingPong(self, quick ? 3000 : 20000, 0.0);
+  if (only == "raw") {  // the references alone; the loop section measures them beside the bench
+    dpc::RawReference raw(self, dpc::RawDomain(1));
     fmt::print("raw Fast DDS ping-pong (StokesSample → WaveplateState, bench QoS), one hop:\n");
-    fmt::print("  back to back                    {}\n", dpc::Us(raw));
-    raw_paced = dpc::RawPingPong(self, quick ? 3000 : 20000, 1000.0);
-    fmt::print("  paced at 1 kHz                  {}\n", dpc::Us(raw_paced));
+    fmt::print("  back to back                    {}\n", dpc::Us(dpc::Summarize(raw.Run(quick ? 3000 : 20000, 0.0))));
+    fmt::print("  paced at 1 kHz                  {}\n", dpc::Us(dpc::Summarize(raw.Run(quick ? 3000 : 20000, 1000.0))));
+    dpc::RawReference chain(self, dpc::RawDomain(2), true);
+    fmt::print("raw three-process chain (sample → relay → command echo), one hop = (→ echo) / 2:\n");
+    fmt::print("  back to back                    {}\n", dpc::Us(dpc::Summarize(chain.Run(quick ? 3000 : 20000, 0.0))));
+    fmt::print("  paced at 1 kHz                  {}\n", dpc::Us(dpc::Summarize(chain.Run(quick ? 3000 : 20000, 1000.0))));
   }
   std::fflush(stdout);  // each section's figures as they come, also into a file or pipe
   if (want("loop")) {
-    dpc::LoopLatency(quick ? 0.5 : 3.0, raw, true, 0.0);
-    dpc::LoopLatency(quick ? 3.0 : 20.0, raw_paced, false, 1000.0);
+    dpc::LoopLatency(self, quick ? 3 : 8, quick ? 0.3 : 0.5, true, 0.0);
+    dpc::LoopLatency(self, quick ? 3 : 8, quick ? 1.0 : 3.0, false, 1000.0);
     std::fflush(stdout);
   }
   if (want("failover")) {

@@ -17,6 +17,7 @@
 #include "dpc/config/scenario_error.h"
 #include "dpc/sim/trace_writer.h"
 #include "json_report.h"
+#include "loop_latency.h"
 #include "service_runtime.h"
 
 namespace dpc::services {
@@ -26,11 +27,12 @@ namespace {
 class DdsBenchLink final : public BenchLink {
  public:
   DdsBenchLink(bus::BusParticipant* participant, const BenchCore* bench, const std::string& bench_id,
-               ShutdownSignals* signals, double lockstep_timeout_s)
+               ShutdownSignals* signals, double lockstep_timeout_s, double latency_warmup_s)
       : bench_(bench),
         signals_(signals),
         lockstep_timeout_s_(lockstep_timeout_s),
-        latest_{ControlVector::Zero(bench->control_count()), ControlVector::Zero(bench->control_count())} {
+        latest_{ControlVector::Zero(bench->control_count()), ControlVector::Zero(bench->control_count())},
+        latency_(bus::WallClockNs() + static_cast<int64_t>(latency_warmup_s * 1e9)) {
     writer_ = participant->MakeWriter<msg::StokesSample>();
     states_ = participant->MakeReader<msg::WaveplateState>(
         bench_id, [this](const msg::WaveplateState& state, const auto&) { OnState(state); });
@@ -97,16 +99,23 @@ class DdsBenchLink final : public BenchLink {
   }
 
   uint64_t rejected_states() const { return rejected_states_; }
+  /// The loop latency seen in the states so far (see LoopLatencyRecorder).
+  nlohmann::ordered_json LoopLatencyJson() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return latency_.Json();
+  }
   const bus::ReaderCounters& state_counters() const { return states_->counters(); }
 
  private:
   void OnState(const msg::WaveplateState& state) {
+    const int64_t receive_wall_ns = bus::WallClockNs();
     if (std::string reason = bench_->CheckApplied(state); !reason.empty()) {
       std::lock_guard<std::mutex> lock(mutex_);
       rejections_.Update(++rejected_states_, reason);
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
+    latency_.OnState(state, receive_wall_ns);
     // CheckApplied guarantees one value per control: latest_ keeps its size, nothing allocates.
     bus::ReadTrajectory(state, &latest_);
     latest_fresh_ = true;
@@ -144,6 +153,7 @@ class DdsBenchLink final : public BenchLink {
   std::optional<TargetConfig> target_change_;
   uint64_t target_revision_ = 1;  // revision 1 is the scenario's target, the bench's own
   uint64_t rejected_states_ = 0;
+  LoopLatencyRecorder latency_;  ///< this run's samples, after the warm-up
   RejectionLog rejections_{"rejected state"};
   uint64_t stop_polls_ = 0;
 };
@@ -175,7 +185,8 @@ int Run(int argc, char** argv) {
   app.add_option("--run-s", settings.duration_s, "Real time: stop after this long (0: until stopped)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_option("--settle-s", settings.settle_s,
-                 "Real time: error statistics from this long after the first lock")
+                 "Real time: error statistics from this long after the first lock, the loop "
+                 "latency (bench.loop_latency_us) from this long after the start")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   double lockstep_timeout_s = 10.0;
   app.add_option("--lockstep-timeout-s", lockstep_timeout_s,
@@ -211,7 +222,11 @@ int Run(int argc, char** argv) {
     }
     TraceObserver observer(trace.get(), &signals);
     bus::BusParticipant participant({common.domain_id, "dpc-polarimeter/" + common.bench_id});
-    DdsBenchLink link(&participant, bench.get(), common.bench_id, &signals, lockstep_timeout_s);
+    // The loop latency is counted, like the error, once the loop has settled: in real time
+    // from --settle-s into the run (the first samples meet a controller re-joining and
+    // processes touching fresh pages: single stalls of several ms); in lockstep from the start.
+    DdsBenchLink link(&participant, bench.get(), common.bench_id, &signals, lockstep_timeout_s,
+                      settings.lockstep ? 0.0 : settings.settle_s);
     spdlog::info("{}, {} controls, profiles {}, domain {}",
                  settings.lockstep ? "lockstep" : fmt::format("real time at {} Hz", settings.rate_hz),
                  bench->control_count(), participant.profiles_file(), common.domain_id);
@@ -223,6 +238,13 @@ int Run(int argc, char** argv) {
                  report.stop_reason, report.samples, report.published, report.achieved_rate_hz,
                  report.overruns, link.rejected_states(), s.error_deg.mean, s.error_deg.p99,
                  s.error_deg.max);
+    const nlohmann::ordered_json latency = link.LoopLatencyJson();
+    if (const auto& loop = latency["sample_to_state_received"]; loop["count"].get<int64_t>() > 0) {
+      spdlog::info("loop latency (sample published → state received, {} states): p50 {:.1f} µs, "
+                   "p99 {:.1f} µs, p99.9 {:.1f} µs",
+                   loop["count"].get<int64_t>(), loop["p50"].get<double>(), loop["p99"].get<double>(),
+                   loop["p999"].get<double>());
+    }
     if (json) {
       ClosedLoopSimulator settings_view(bench->scenario());
       nlohmann::ordered_json out = tools::RunReportJson(settings_view, report.result, {});
@@ -232,7 +254,8 @@ int Run(int argc, char** argv) {
                       {"achieved_rate_hz", report.achieved_rate_hz},
                       {"rejected_states", link.rejected_states()},
                       {"state_deadline_misses", link.state_counters().deadline_misses.load()},
-                      {"stop_reason", report.stop_reason}};
+                      {"stop_reason", report.stop_reason},
+                      {"loop_latency_us", latency}};
       std::cout << out.dump() << std::endl;
     }
     const bool failed = settings.lockstep && report.stop_reason != "end of scenario" &&

@@ -166,6 +166,16 @@ TEST_F(BenchProcessTest, ThreeServicesLockOnLoopback) {
   // Loose: this checks the loop works across processes; bench/ measures how well.
   EXPECT_LT(report["error_deg"]["mean"].get<double>(), 5.0) << report.dump(2);
   EXPECT_EQ(report["bench"]["rejected_states"].get<int>(), 0);
+  // The bench's own view of the loop latency: every answered sample, spans in order.
+  const nlohmann::json& latency = report["bench"]["loop_latency_us"];
+  const nlohmann::json& loop = latency["sample_to_state_received"];
+  EXPECT_GT(loop["count"].get<int64_t>(), 4000) << latency.dump(2);
+  EXPECT_GT(latency["sample_to_command_at_driver"]["p50"].get<double>(), 0.0) << latency.dump(2);
+  EXPECT_LE(latency["sample_to_command_at_driver"]["p50"].get<double>(),
+            latency["sample_to_state_published"]["p50"].get<double>());
+  EXPECT_LE(latency["sample_to_state_published"]["p50"].get<double>(), loop["p50"].get<double>());
+  EXPECT_LE(loop["p50"].get<double>(), loop["p99"].get<double>());
+  EXPECT_EQ(latency["implausible"].get<int>(), 0);
   EXPECT_GT(AppliedBy("A"), 4000u);
   const auto status = Status("A");
   ASSERT_TRUE(status.has_value());
