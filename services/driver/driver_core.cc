@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -34,8 +35,53 @@ int64_t DriverCore::SilenceTimeoutNs(const ControllerRecord& record) const {
   return static_cast<int64_t>(std::max(floor_ns, settings_.silence_intervals * record.mean_interval_ns));
 }
 
+DriverCore::Liveness DriverCore::Judge(const ControllerRecord& record, int64_t now_ns) const {
+  if (record.commands == 0) return Liveness::kSilent;
+  const int64_t timeout_ns = SilenceTimeoutNs(record);
+  if (now_ns - record.last_command_ns <= timeout_ns) return Liveness::kAlive;
+  if (Lag(record) == 0) return Liveness::kSilent;
+  // Silent, and others answered newer samples: dead, unless they only just started again
+  // (after a stall of the bench or of this driver, whoever's queued command comes first).
+  return now_ns - BehindSinceNs(record) > BehindGraceNs(record) ? Liveness::kBehind : Liveness::kAlive;
+}
+
+int64_t DriverCore::BehindGraceNs(const ControllerRecord& record) const {
+  return std::max<int64_t>(SilenceTimeoutNs(record) / 4, static_cast<int64_t>(4.0 * record.mean_interval_ns));
+}
+
+int64_t DriverCore::BehindSinceNs(const ControllerRecord& record) const {
+  const uint64_t missed = record.last_answered + 1;
+  const FirstAnswer& entry = first_answers_[missed % kAnswerRing];
+  return entry.sample == missed ? entry.time_ns : std::numeric_limits<int64_t>::min() / 2;
+}
+
+// A candidate to obey: not behind, and heard from within its timeout.
 bool DriverCore::Alive(const ControllerRecord& record, int64_t now_ns) const {
-  return record.commands > 0 && now_ns - record.last_command_ns <= SilenceTimeoutNs(record);
+  return Judge(record, now_ns) == Liveness::kAlive &&
+         now_ns - record.last_command_ns <= SilenceTimeoutNs(record);
+}
+
+std::string DriverCore::DescribeBehind(const std::string& id, const ControllerRecord& record,
+                                       int64_t now_ns) const {
+  return fmt::format("{} silent for {:.2f} ms, {} samples behind", id,
+                     static_cast<double>(now_ns - record.last_command_ns) * 1e-6, Lag(record));
+}
+
+void DriverCore::NoteAnswer(ControllerRecord* record, uint64_t answers_sample, int64_t now_ns) {
+  if (answers_sample == 0) return;  // answers no sample: says nothing about progress
+  if (answers_sample < record->last_answered) {
+    // The bench restarted and numbers its samples from 1 again: nobody is behind.
+    newest_answered_ = answers_sample - 1;
+    for (auto& [id, other] : controllers_) other.last_answered = newest_answered_;
+    first_answers_.fill(FirstAnswer{});
+  }
+  record->last_answered = answers_sample;
+  // Samples answered for the first time (usually one; after a gap, every one skipped).
+  const uint64_t first_new = std::max(newest_answered_ + 1, answers_sample > kAnswerRing ? answers_sample - kAnswerRing + 1 : 1);
+  for (uint64_t sample = first_new; sample <= answers_sample; ++sample) {
+    first_answers_[sample % kAnswerRing] = FirstAnswer{sample, now_ns};
+  }
+  newest_answered_ = std::max(newest_answered_, answers_sample);
 }
 
 std::string DriverCore::BestAlive(int64_t now_ns, const std::string& excluded) const {
@@ -117,14 +163,37 @@ std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCom
   record.priority = command.priority();
   record.last_command_ns = now_ns;
   ++record.commands;
+  NoteAnswer(&record, command.answers_sample(), now_ns);
 
   if (id != obeyed_) {
-    const auto current = controllers_.find(obeyed_);
-    const bool current_alive = current != controllers_.end() && Alive(current->second, now_ns);
-    if (current_alive && current->second.priority >= record.priority) return std::nullopt;
-    Obey(id, current_alive ? fmt::format("obeying {} (priority {} over {})", id, record.priority,
-                                         obeyed_)
-                           : fmt::format("obeying {} (priority {})", id, record.priority));
+    // The controller in charge: the obeyed one, or while holding after a general silence the
+    // one obeyed before it, which keeps its place unless it fell behind.
+    const std::string& holder = obeyed_.empty() ? suspended_ : obeyed_;
+    const auto current = holder == id ? controllers_.end() : controllers_.find(holder);
+    // Judged by the others' answers, not by the time since its last command alone: after a
+    // stall of this driver or of the bench, a standby's queued command may come first.
+    const bool current_alive =
+        current != controllers_.end() &&
+        (obeyed_.empty() ? Judge(current->second, now_ns) != Liveness::kBehind
+                         : Judge(current->second, now_ns) == Liveness::kAlive);
+    if (current_alive && current->second.priority >= record.priority) {
+      if (!obeyed_.empty()) return std::nullopt;
+      // Holding for the suspended controller: answer the sample (a lockstep bench waits for
+      // it), apply nothing.
+      answers_sample_ = command.answers_sample();
+      sample_time_ns_ = command.sample_time_ns();
+      sample_publish_time_ns_ = command.sample_publish_time_ns();
+      command_receive_time_ns_ = wall_ns;
+      return Publishable(wall_ns);
+    }
+    std::string reason = fmt::format("obeying {} (priority {})", id, record.priority);
+    if (current_alive) {
+      reason = fmt::format("obeying {} (priority {} over {})", id, record.priority, holder);
+    } else if (current != controllers_.end()) {
+      reason += ": " + DescribeBehind(holder, current->second, now_ns);
+    }
+    suspended_.clear();
+    Obey(id, reason);
   }
 
   // Apply: clamp to the ranges, then limit the slew over the bench time since the last command,
@@ -191,16 +260,26 @@ std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCom
 std::optional<msg::WaveplateState> DriverCore::Tick(int64_t now_ns, int64_t wall_ns) {
   if (!obeyed_.empty()) {
     const ControllerRecord& record = controllers_.at(obeyed_);
-    if (Alive(record, now_ns)) return std::nullopt;
-    const double silent_ms = static_cast<double>(now_ns - record.last_command_ns) * 1e-6;
+    const Liveness liveness = Judge(record, now_ns);
+    if (liveness == Liveness::kAlive) return std::nullopt;
     const std::string silent = obeyed_;
-    const std::string next = BestAlive(now_ns, silent);
     std::fill(saturated_.begin(), saturated_.end(), false);
+    if (liveness == Liveness::kSilent) {
+      const double silent_ms = static_cast<double>(now_ns - record.last_command_ns) * 1e-6;
+      // Nobody answered anything newer: no samples, or the whole machine stalled. Not this
+      // controller's failure: hold, and give it back control first when commands resume.
+      Hold(fmt::format("holding: {} silent for {:.2f} ms and no other controller answered newer samples; "
+                       "{} gets control back first",
+                       silent, silent_ms, silent));
+      suspended_ = silent;
+      return Publishable(wall_ns);
+    }
+    const std::string next = BestAlive(now_ns, silent);
+    const std::string behind = DescribeBehind(silent, record, now_ns);
     if (!next.empty()) {
-      Obey(next, fmt::format("obeying {} (priority {}): {} silent for {:.2f} ms", next,
-                             controllers_.at(next).priority, silent, silent_ms));
+      Obey(next, fmt::format("obeying {} (priority {}): {}", next, controllers_.at(next).priority, behind));
     } else {
-      Hold(fmt::format("holding: {} silent for {:.2f} ms, no other controller", silent, silent_ms));
+      Hold(fmt::format("holding: {}, no other controller", behind));
     }
     return Publishable(wall_ns);
   }
@@ -216,7 +295,9 @@ std::optional<msg::WaveplateState> DriverCore::Tick(int64_t now_ns, int64_t wall
 int64_t DriverCore::NextTickNs() const {
   if (!obeyed_.empty()) {
     const ControllerRecord& record = controllers_.at(obeyed_);
-    return record.last_command_ns + SilenceTimeoutNs(record) + 1;
+    const int64_t silent_due_ns = record.last_command_ns + SilenceTimeoutNs(record) + 1;
+    if (Lag(record) == 0) return silent_due_ns;
+    return std::max(silent_due_ns, BehindSinceNs(record) + BehindGraceNs(record) + 1);
   }
   return last_state_ns_ + static_cast<int64_t>(settings_.holding_state_period_s * 1e9);
 }

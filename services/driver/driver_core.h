@@ -3,13 +3,25 @@
 // report. The DDS wiring (main.cc) calls it under one lock, with monotonic time in ns.
 //
 // Arbitration. Every controller publishes a command for every sample; the driver obeys exactly
-// one: the highest-priority controller that is alive (ties: the one already obeyed). A
-// controller is alive while its last command is younger than its silence timeout:
+// one: the highest-priority controller that is alive (ties: the one already obeyed). Its
+// silence timeout is
 //   timeout = max(min_silence_s, silence_intervals × its mean command interval)
-// (the interval is an exponential average of its command arrivals), so at 10 kHz a killed
-// controller is noticed ~2 ms after its last command, where the DDS deadline (≥ 10 ms on Fast
-// DDS 2.9) would take five times longer. Tick() runs when that deadline is due (at most every
-// 0.25 ms) and switches to the next alive controller, or holds the last good φ and says why.
+// (the interval is an exponential average of its command arrivals). The obeyed controller is
+// judged by its silence and by the other controllers' answers (each command names the sample
+// it answers):
+//   - silent for its timeout while another controller answered a sample it has not (for
+//     longer than a grace: a quarter of the timeout, at least 4 command intervals): dead; the
+//     driver switches to the next alive controller, or holds. At 10 kHz a killed controller is
+//     noticed ~1.5 ms after its last command, where the DDS deadline (≥ 10 ms on Fast DDS 2.9)
+//     would take about ten times longer;
+//   - silent for its timeout and nobody answered anything newer: no samples, or the whole
+//     machine stalled; nobody's failure. The driver holds and gives it control back first:
+//     until it falls behind as above, another controller's command gets a holding answer
+//     (a lockstep bench still advances) instead of control. Without this, whichever command
+//     came first after a stall took over, and the primary took back over at once: on a loaded
+//     2-core VM at 10 kHz, 50 needless switches to the standby in 30 s, 25 with it at the same
+//     2-ms timeout, 30 at 1.5 ms (the default).
+// Tick() runs when the next such deadline is due (at most every 0.25 ms).
 //
 // Every command is checked (CheckCommandShape: stage count, NaN/Inf, oversized) and a bad one
 // is counted and reported, never applied. A good one is clamped to each stage's range and
@@ -26,6 +38,7 @@
 // Bumpless switching is the controllers' part: a standby controller follows the applied φ from
 // the state, so its first obeyed command continues from there.
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -43,7 +56,7 @@ struct DriverSettings {
   std::string bench_id = "bench1";
   std::string driver_id = "driver";
   double max_slew_per_s = 0.0;        ///< φ units per second of bench time; 0: no limit
-  double min_silence_s = 2e-3;        ///< shortest silence that counts as a dead controller
+  double min_silence_s = 1.5e-3;      ///< shortest silence that counts as a dead controller
   double silence_intervals = 8.0;     ///< or this many of its command intervals, if longer
   double holding_state_period_s = 5e-3;  ///< state heartbeat while holding
   double max_ramp_s = 2e-3;           ///< a command's rate moves φ for at most this (bench time)
@@ -89,9 +102,33 @@ class DriverCore {
     int64_t last_command_ns = 0;
     double mean_interval_ns = 0.0;    ///< exponential average; 0 until two commands
     uint64_t commands = 0;
+    uint64_t last_answered = 0;       ///< the newest sample it answered
   };
+  /// Liveness, judged by its silence and the other controllers' answers. Silent for longer
+  /// than its timeout and: kBehind (dead), another controller answered a sample it has not
+  /// answered, longer ago than a grace (a quarter of the timeout, at least 4 command
+  /// intervals); kSilent, nobody answered anything newer (no samples, a stalled machine, or it
+  /// was the only controller). Otherwise kAlive.
+  enum class Liveness { kAlive, kBehind, kSilent };
+  Liveness Judge(const ControllerRecord& record, int64_t now_ns) const;
+  uint64_t Lag(const ControllerRecord& record) const { return newest_answered_ - record.last_answered; }
+  /// When another controller first answered the oldest sample `record` has not answered
+  /// (INT64_MIN if that is too long ago to remember). Only for Lag(record) > 0.
+  int64_t BehindSinceNs(const ControllerRecord& record) const;
+  int64_t BehindGraceNs(const ControllerRecord& record) const;
   int64_t SilenceTimeoutNs(const ControllerRecord& record) const;
+  /// "<id> silent for X ms, N samples behind".
+  std::string DescribeBehind(const std::string& id, const ControllerRecord& record, int64_t now_ns) const;
   bool Alive(const ControllerRecord& record, int64_t now_ns) const;
+  /// Notes the sample a command answers; a bench that restarted (numbering from 1 again)
+  /// starts everyone afresh.
+  void NoteAnswer(ControllerRecord* record, uint64_t answers_sample, int64_t now_ns);
+  /// When each of the latest kAnswerRing samples was first answered, by any controller.
+  static constexpr size_t kAnswerRing = 1024;
+  struct FirstAnswer {
+    uint64_t sample = 0;
+    int64_t time_ns = 0;
+  };
   /// The best alive controller other than `excluded`, or "" if none.
   std::string BestAlive(int64_t now_ns, const std::string& excluded) const;
   void Obey(const std::string& id, const std::string& reason);
@@ -106,6 +143,11 @@ class DriverCore {
   std::map<std::string, ControllerRecord> controllers_;
 
   std::string obeyed_;               ///< "" while holding
+  /// While holding because no command came from anyone: the controller obeyed before; the
+  /// driver waits for it (others' commands get a holding answer) unless it falls behind.
+  std::string suspended_;
+  uint64_t newest_answered_ = 0;     ///< the newest sample any controller answered
+  std::array<FirstAnswer, kAnswerRing> first_answers_{};
   std::string reason_;
   bus::AppliedTrajectory applied_;  ///< what the backend does (its Applied())
   std::vector<bool> saturated_;

@@ -34,9 +34,12 @@ int Run(int argc, char** argv) {
                  "Slew-rate limit of every control, φ units per second of bench time (0: none)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_option("--min-silence-s", settings.min_silence_s,
-                 "A controller silent this long (or --silence-intervals of its command interval, "
-                 "if longer) is dead: fail over or hold")
+                 "The obeyed controller is dead when another answered a sample it did not this long ago "
+                 "(or --silence-intervals of its command interval, if longer): fail over. If "
+                 "nobody answers for this long (no samples, no other controller), hold; the "
+                 "controller obeyed before gets control back first")
       ->check(CLI::Range(1e-4, 10.0))->capture_default_str();
+
   app.add_option("--silence-intervals", settings.silence_intervals,
                  "Silence timeout in command intervals")
       ->check(CLI::Range(2.0, 1000.0))->capture_default_str();

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 
 #include "dpc/bus/message_conversion.h"
 #include "dpc/config/scenario_config.h"
@@ -91,38 +92,96 @@ TEST_F(DriverCoreTest, HigherPriorityTakesOverLowerIsIgnored) {
   EXPECT_EQ(backend_.Applied().phi, ControlVector::Constant(3, 0.2));
 }
 
-TEST_F(DriverCoreTest, FailsOverToTheStandbyWhenTheObeyedControllerFallsSilent) {
+// Primary and standby answer samples 1 … 50 at 10 kHz (t = 0 … 4.9 ms), then the primary dies.
+// Returns the time of the last sample.
+int64_t TwoControllersAnswer(DriverCore* core, int first, int last) {
   int64_t t = 0;
-  for (int k = 1; k <= 50; ++k, t += 100 * kUs) {  // 10 kHz
-    core_.OnCommand(Command("primary", 10, {0.1, 0.1, 0.1}, k), t, 0);
-    core_.OnCommand(Command("standby", 0, {0.1, 0.1, 0.1}, k), t + 10 * kUs, 0);
+  for (int k = first; k <= last; ++k) {
+    t = (k - 1) * 100 * kUs;
+    core->OnCommand(Command("primary", 10, {0.1, 0.1, 0.1}, k), t, 0);
+    core->OnCommand(Command("standby", 0, {0.1, 0.1, 0.1}, k), t + 10 * kUs, 0);
   }
-  ASSERT_EQ(core_.obeyed(), "primary");
-  // The primary stops; the standby goes on. Silence timeout: max(2 ms, 8 × 0.1 ms) = 2 ms. The
-  // switch comes from whichever is first: a Tick, or the standby's next command.
-  int64_t switched_at = -1;
-  for (int k = 51; k <= 100 && switched_at < 0; ++k, t += 100 * kUs) {
-    for (int64_t tick = t; tick < t + 100 * kUs && switched_at < 0; tick += 25 * kUs) {
-      if (tick == t + 25 * kUs) {
-        auto state = core_.OnCommand(Command("standby", 0, {0.1, 0.1, 0.1}, k), tick, 0);
-        if (core_.obeyed() == "standby") {
-          ASSERT_TRUE(state.has_value());
-          EXPECT_EQ(state->answers_sample(), static_cast<uint64_t>(k));
-          switched_at = tick;
-        }
-        continue;
-      }
-      if (auto state = core_.Tick(tick, 0); state && core_.obeyed() == "standby") {
-        EXPECT_NE(state->reason().to_string().find("primary silent"), std::string::npos);
-        switched_at = tick;
+  return t;
+}
+
+// The standby goes on at 10 kHz after the primary's last command at 4.9 ms; Tick every 25 µs.
+// Returns when and by which state the driver switched (-1 if it did not by sample 100).
+int64_t FailoverTime(DriverCore* core, std::optional<msg::WaveplateState>* switch_state) {
+  for (int k = 51; k <= 100; ++k) {
+    const int64_t t = (k - 1) * 100 * kUs;
+    for (int64_t tick = t; tick < t + 100 * kUs; tick += 25 * kUs) {
+      auto state = tick == t + 25 * kUs ? core->OnCommand(Command("standby", 0, {0.1, 0.1, 0.1}, k), tick, 0)
+                                        : core->Tick(tick, 0);
+      if (core->obeyed() == "standby") {
+        *switch_state = state;
+        return tick;
       }
     }
   }
+  return -1;
+}
+
+TEST_F(DriverCoreTest, FailsOverWhenTheStandbyAnsweredSamplesThePrimaryDidNotForTheSilenceTimeout) {
+  const int64_t last_primary = TwoControllersAnswer(&core_, 1, 50);
+  ASSERT_EQ(core_.obeyed(), "primary");
+  std::optional<msg::WaveplateState> state;
+  const int64_t switched_at = FailoverTime(&core_, &state);
+  // Silence timeout max(1.5 ms, 8 × 0.1 ms) = 1.5 ms while the standby answered newer
+  // samples; seen by the next Tick or standby command.
   ASSERT_GT(switched_at, 0);
-  const int64_t last_primary = 49 * 100 * kUs;
-  EXPECT_GE(switched_at - last_primary, 2 * kMs);
-  EXPECT_LE(switched_at - last_primary, 2 * kMs + 100 * kUs);
+  EXPECT_GT(switched_at - last_primary, 1500 * kUs);
+  EXPECT_LE(switched_at - last_primary, 1550 * kUs);
+  ASSERT_TRUE(state.has_value());
   EXPECT_EQ(core_.obeyed(), "standby");
+  EXPECT_NE(state->reason().to_string().find("primary silent for 1.5"), std::string::npos)
+      << state->reason().to_string();
+  EXPECT_NE(state->reason().to_string().find("samples behind"), std::string::npos) << state->reason().to_string();
+}
+
+TEST_F(DriverCoreTest, AStandbyOneSampleAheadAllTheTimeIsNoFailure) {
+  // At a high rate the standby may answer sample k + 1 before the primary's answer to k
+  // arrives: the primary is always "behind", never for long.
+  int64_t t = 0;
+  for (int k = 1; k <= 200; ++k, t += 100 * kUs) {
+    core_.OnCommand(Command("standby", 0, {0.1, 0.1, 0.1}, k + 1), t, 0);
+    core_.OnCommand(Command("primary", 10, {0.1, 0.1, 0.1}, k), t + 60 * kUs, 0);
+    EXPECT_FALSE(core_.Tick(t + 80 * kUs, 0).has_value());
+    ASSERT_EQ(core_.obeyed(), "primary") << "sample " << k;
+  }
+}
+
+TEST_F(DriverCoreTest, AStallOfEveryoneHoldsThenGivesControlBackToTheSameController) {
+  // No samples for 5 ms (a stalled polarimeter, or the whole machine): nobody answers, so the
+  // silence is nobody's failure. On resumption the standby's command happens to come first.
+  const int64_t t = TwoControllersAnswer(&core_, 1, 50);
+  const uint64_t switches = core_.State(0).controller_switches();
+  auto state = core_.Tick(t + 3 * kMs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->mode(), msg::DRIVER_HOLDING);
+  EXPECT_NE(state->reason().to_string().find("primary silent"), std::string::npos) << state->reason().to_string();
+  state = core_.OnCommand(Command("standby", 0, {0.7, 0.7, 0.7}, 51), t + 5 * kMs, 0);
+  ASSERT_TRUE(state.has_value());  // answered (a lockstep bench waits for it), nothing applied
+  EXPECT_EQ(state->mode(), msg::DRIVER_HOLDING);
+  EXPECT_EQ(state->answers_sample(), 51u);
+  EXPECT_EQ(state->phi_applied(), std::vector<double>({0.1, 0.1, 0.1}));
+  state = core_.OnCommand(Command("primary", 10, {0.2, 0.2, 0.2}, 51), t + 5 * kMs + 10 * kUs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(core_.obeyed(), "primary");
+  EXPECT_EQ(state->phi_applied(), std::vector<double>({0.2, 0.2, 0.2}));
+  // One switch: holding → primary again; the standby was never obeyed.
+  EXPECT_EQ(state->controller_switches(), switches + 1);
+}
+
+TEST_F(DriverCoreTest, ARestartedBenchNumbersItsSamplesFromOneAndNobodyIsBehind) {
+  TwoControllersAnswer(&core_, 1, 50);
+  // A new polarimeter run: samples 1, 2, 3 … again, the standby's answer first each time.
+  for (int k = 1; k <= 30; ++k) {
+    const int64_t t = 5 * kMs + k * 100 * kUs;
+    EXPECT_FALSE(core_.OnCommand(Command("standby", 0, {0.1, 0.1, 0.1}, k), t, 0).has_value());
+    EXPECT_TRUE(core_.OnCommand(Command("primary", 10, {0.1, 0.1, 0.1}, k), t + 10 * kUs, 0).has_value());
+    EXPECT_FALSE(core_.Tick(t + 50 * kUs, 0).has_value());
+    ASSERT_EQ(core_.obeyed(), "primary") << "sample " << k;
+  }
 }
 
 TEST_F(DriverCoreTest, HoldsAndSaysWhyWhenNoControllerIsLeftThenResumes) {
@@ -136,11 +195,26 @@ TEST_F(DriverCoreTest, HoldsAndSaysWhyWhenNoControllerIsLeftThenResumes) {
   // Heartbeats while holding, every 5 ms.
   EXPECT_TRUE(core_.Tick(9 * kMs, 0).has_value());
   EXPECT_FALSE(core_.Tick(10 * kMs, 0).has_value());
-  // A controller resumes.
-  state = core_.OnCommand(Command("next", 0, {0.31, 0.2, 0.1}, 2), 20 * kMs, 0);
-  ASSERT_TRUE(state.has_value());
-  EXPECT_EQ(state->mode(), msg::DRIVER_ACTIVE);
-  EXPECT_EQ(state->obeyed_controller_id().to_string(), "next");
+  // Another controller starts at 10 kHz. The driver keeps holding, answering its samples,
+  // while "only" might still resume (after a stall, whoever's queued command comes first);
+  // once "next" has answered samples "only" did not for the grace (a quarter of the 1.5-ms
+  // timeout), "next" is obeyed.
+  int64_t obeyed_at = -1;
+  for (int k = 2; k <= 50 && obeyed_at < 0; ++k) {
+    const int64_t t = 20 * kMs + (k - 2) * 100 * kUs;
+    state = core_.OnCommand(Command("next", 0, {0.31, 0.2, 0.1}, k), t, 0);
+    ASSERT_TRUE(state.has_value());
+    EXPECT_EQ(state->answers_sample(), static_cast<uint64_t>(k));
+    if (state->mode() == msg::DRIVER_ACTIVE) {
+      obeyed_at = t;
+      EXPECT_EQ(state->obeyed_controller_id().to_string(), "next");
+      EXPECT_EQ(state->phi_applied(), std::vector<double>({0.31, 0.2, 0.1}));
+    } else {
+      EXPECT_EQ(state->phi_applied(), std::vector<double>({0.3, 0.2, 0.1}));
+    }
+  }
+  EXPECT_GT(obeyed_at - 20 * kMs, 375 * kUs);
+  EXPECT_LE(obeyed_at - 20 * kMs, 400 * kUs);
 }
 
 TEST(DriverCoreLimits, ClampsToTheStageRangeAndReportsSaturation) {
