@@ -119,6 +119,13 @@ void DriverCore::StopMotion() {
   if (backend_->Apply(still).empty()) applied_ = backend_->Applied();
 }
 
+void DriverCore::Answer(const msg::WaveplateCommand& command, int64_t wall_ns) {
+  answers_sample_ = command.answers_sample();
+  sample_time_ns_ = command.sample_time_ns();
+  sample_publish_time_ns_ = command.sample_publish_time_ns();
+  command_receive_time_ns_ = wall_ns;
+}
+
 void DriverCore::Reject(const std::string& controller_id, const std::string& reason) {
   ++rejected_;
   last_rejection_ = fmt::format("from {}: {}", controller_id.empty() ? "?" : controller_id, reason);
@@ -132,10 +139,7 @@ std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCom
     if (id != obeyed_) return std::nullopt;
     // The obeyed controller's bad command: keep φ, but answer the sample (a lockstep bench
     // waits for it) and say why nothing changed.
-    answers_sample_ = command.answers_sample();
-    sample_time_ns_ = command.sample_time_ns();
-    sample_publish_time_ns_ = command.sample_publish_time_ns();
-    command_receive_time_ns_ = wall_ns;
+    Answer(command, wall_ns);
     std::fill(saturated_.begin(), saturated_.end(), false);
     return Publishable(wall_ns);
   }
@@ -180,10 +184,7 @@ std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCom
       if (!obeyed_.empty()) return std::nullopt;
       // Holding for the suspended controller: answer the sample (a lockstep bench waits for
       // it), apply nothing.
-      answers_sample_ = command.answers_sample();
-      sample_time_ns_ = command.sample_time_ns();
-      sample_publish_time_ns_ = command.sample_publish_time_ns();
-      command_receive_time_ns_ = wall_ns;
+      Answer(command, wall_ns);
       return Publishable(wall_ns);
     }
     std::string reason = fmt::format("obeying {} (priority {})", id, record.priority);
@@ -250,10 +251,7 @@ std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCom
   last_applied_sample_time_ns_ = start_ns;
   ++applied_count_;
   if (limited) ++limited_;
-  answers_sample_ = command.answers_sample();
-  sample_time_ns_ = command.sample_time_ns();
-  sample_publish_time_ns_ = command.sample_publish_time_ns();
-  command_receive_time_ns_ = wall_ns;
+  Answer(command, wall_ns);
   return Publishable(wall_ns);
 }
 

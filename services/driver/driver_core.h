@@ -134,6 +134,8 @@ class DriverCore {
   void Obey(const std::string& id, const std::string& reason);
   void Hold(const std::string& reason);
   void Reject(const std::string& controller_id, const std::string& reason);
+  /// The next state answers `command`'s sample (its times; the command's arrival at `wall_ns`).
+  void Answer(const msg::WaveplateCommand& command, int64_t wall_ns);
   /// Sets the backend's motion to where it ends, with no rate (holding).
   void StopMotion();
 
