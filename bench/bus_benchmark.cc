@@ -252,9 +252,7 @@ class RawReference {
     for (int i = 1; i <= count; ++i) {
       if (period_ns > 0) {
         next_ns += period_ns;
-        const timespec ts{static_cast<time_t>(next_ns / 1000000000), static_cast<long>(next_ns % 1000000000)};
-        while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-        }
+        bus::SleepUntilMonotonicNs(next_ns);
       }
       const uint64_t sequence = ++sequence_;
       sample.sequence_number(sequence);
@@ -355,14 +353,14 @@ void LoopLatency(const std::string& self, int rounds, double seconds_per_round, 
     fmt::print("loop, real time at {:.0f} Hz, {} rounds of {:.1f} s, each beside a raw block paced at {:.0f} Hz\n",
                rate_hz, rounds, seconds_per_round, rate_hz);
   }
-  auto span = [](const nlohmann::json& j, double scale) {
+  auto span = [](const nlohmann::json& j) {  // a span of bench.loop_latency_us, in ns
     Percentiles p;
     if (!j.is_object() || j["p50"].is_null()) return p;
     p.count = j["count"].get<size_t>();
-    p.p50 = j["p50"].get<double>() * 1e3 * scale;
-    p.p99 = j["p99"].get<double>() * 1e3 * scale;
-    p.p999 = j["p999"].get<double>() * 1e3 * scale;
-    p.max = j["max"].get<double>() * 1e3 * scale;
+    p.p50 = j["p50"].get<double>() * 1e3;
+    p.p99 = j["p99"].get<double>() * 1e3;
+    p.p999 = j["p999"].get<double>() * 1e3;
+    p.max = j["max"].get<double>() * 1e3;
     return p;
   };
   for (int round = 0; round < rounds; ++round) {
@@ -377,10 +375,11 @@ void LoopLatency(const std::string& self, int rounds, double seconds_per_round, 
       if (!report.is_object()) return;
       result.achieved_hz = report["bench"]["achieved_rate_hz"].get<double>();
       const nlohmann::json& latency = report["bench"]["loop_latency_us"];
-      result.to_driver = span(latency["sample_to_command_at_driver"], 1.0);
-      result.to_state = span(latency["sample_to_state_published"], 1.0);
-      result.loop = span(latency["sample_to_state_received"], 1.0);
-      result.hop = span(latency["sample_to_command_at_driver"], 0.5);
+      result.to_driver = span(latency["sample_to_command_at_driver"]);
+      result.to_state = span(latency["sample_to_state_published"]);
+      result.loop = span(latency["sample_to_state_received"]);
+      result.hop = result.to_driver;  // two hops: half of each percentile
+      for (double* v : {&result.hop.p50, &result.hop.p99, &result.hop.p999, &result.hop.max}) *v /= 2.0;
     };
     auto run_raw = [&] {
       const int count = lockstep ? std::max<int>(1000, static_cast<int>(seconds_per_round * 4000))
@@ -482,9 +481,7 @@ RawRateResult RawRate(const std::string& self, double rate_hz, double seconds, b
   const int64_t start_ns = bus::MonotonicNs();
   int64_t next_ns = start_ns;
   for (int64_t k = 1; k <= total; ++k) {
-    const timespec ts{static_cast<time_t>(next_ns / 1000000000), static_cast<long>(next_ns % 1000000000)};
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-    }
+    bus::SleepUntilMonotonicNs(next_ns);
     const int64_t now_ns = bus::MonotonicNs();
     if (now_ns - next_ns > period_ns) {
       result.late_periods += (now_ns - next_ns) / period_ns;
@@ -571,9 +568,7 @@ int RunRawOwner(int strength, double rate_hz) {
   const timespec poll{0, 0};
   for (uint64_t k = 1;; ++k) {
     next_ns += period_ns;
-    const timespec ts{static_cast<time_t>(next_ns / 1000000000), static_cast<long>(next_ns % 1000000000)};
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-    }
+    bus::SleepUntilMonotonicNs(next_ns);
     sample.sequence_number(k);
     sample.publish_time_ns(bus::WallClockNs());
     writer->write(&sample);

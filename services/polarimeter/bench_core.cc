@@ -1,7 +1,6 @@
 #include "bench_core.h"
 
 #include <sys/prctl.h>
-#include <time.h>
 
 #include <chrono>
 #include <cmath>
@@ -21,12 +20,6 @@ namespace {
 constexpr double kRadToDeg = 180.0 / M_PI;
 
 int64_t SecondsToNs(double s) { return static_cast<int64_t>(std::llround(s * 1e9)); }
-
-void SleepUntil(int64_t monotonic_ns) {
-  timespec ts{static_cast<time_t>(monotonic_ns / 1000000000), static_cast<long>(monotonic_ns % 1000000000)};
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-  }
-}
 
 }  // namespace
 
@@ -174,7 +167,7 @@ BenchReport BenchCore::RunRealTime(BenchLink* link, SimulationObserver* observer
       report.stop_reason = "stopped";
       break;
     }
-    SleepUntil(next_ns);
+    bus::SleepUntilMonotonicNs(next_ns);
     const int64_t now_ns = bus::MonotonicNs();
     if (now_ns - next_ns > period_ns) {
       // Came late by more than a period: count it and do not try to catch up in a burst.

@@ -1,6 +1,9 @@
 #pragma once
 // Wall-clock and monotonic readings in nanoseconds, as carried on the bus (*_time_ns fields).
 
+#include <time.h>
+
+#include <cerrno>
 #include <chrono>
 #include <cstdint>
 
@@ -18,6 +21,14 @@ inline int64_t MonotonicNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(
              std::chrono::steady_clock::now().time_since_epoch())
       .count();
+}
+
+/// Sleeps until MonotonicNs() reaches `monotonic_ns` (absolute, so periods do not drift;
+/// resumed after signals). Pair with PR_SET_TIMERSLACK for sub-50-µs accuracy.
+inline void SleepUntilMonotonicNs(int64_t monotonic_ns) {
+  const timespec ts{static_cast<time_t>(monotonic_ns / 1000000000), static_cast<long>(monotonic_ns % 1000000000)};
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
 }
 
 }  // namespace dpc::bus
