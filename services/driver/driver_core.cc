@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -14,6 +15,20 @@ namespace {
 
 constexpr double kIntervalSmoothing = 0.05;   ///< weight of a new interval in the average
 constexpr size_t kMaxControllers = 64;        ///< records kept; the longest-silent is dropped
+
+/// a + b, saturated at the ends of int64 (a command's times are not trusted to be sane).
+int64_t SaturatingAdd(int64_t a, int64_t b) {
+  int64_t sum;
+  if (!__builtin_add_overflow(a, b, &sum)) return sum;
+  return b > 0 ? std::numeric_limits<int64_t>::max() : std::numeric_limits<int64_t>::min();
+}
+
+/// Seconds as nanoseconds, for a non-negative duration; saturated (a huge or infinite duration
+/// is "forever").
+int64_t DurationNs(double seconds) {
+  const double ns = seconds * 1e9;
+  return ns >= 9e18 ? std::numeric_limits<int64_t>::max() : static_cast<int64_t>(std::max(0.0, ns));
+}
 
 }  // namespace
 
@@ -27,6 +42,25 @@ DriverCore::DriverCore(std::vector<StageConfig> stages, DriverSettings settings,
   if (applied_.rate_per_s.size() != applied_.phi.size()) {
     applied_.rate_per_s = ControlVector::Zero(applied_.phi.size());
   }
+  // The bounds every command meets: the device's own, narrowed by the scenario's stage ranges
+  // and the --max-slew-per-s option, never widened.
+  const DeviceLimits device = backend_->limits();
+  if (!(device.max_abs_phi > 0.0 && std::isfinite(device.max_abs_phi) && device.max_slew_per_s > 0.0 &&
+        std::isfinite(device.max_slew_per_s))) {
+    throw std::invalid_argument(fmt::format("backend {}: device limits must be finite and positive "
+                                            "(max_abs_phi {}, max_slew_per_s {})",
+                                            backend_->name(), device.max_abs_phi, device.max_slew_per_s));
+  }
+  for (const ControlChannel& control : chain_.controls()) {
+    ControlRange range{-device.max_abs_phi, device.max_abs_phi};
+    if (control.range) {
+      range.min = std::max(range.min, control.range->min);
+      range.max = std::min(range.max, control.range->max);
+    }
+    ranges_.push_back(range);
+  }
+  max_slew_per_s_ = settings_.max_slew_per_s > 0.0 ? std::min(settings_.max_slew_per_s, device.max_slew_per_s)
+                                                     : device.max_slew_per_s;
   reason_ = "holding: no controller yet";
 }
 
@@ -76,12 +110,16 @@ void DriverCore::NoteAnswer(ControllerRecord* record, uint64_t answers_sample, i
     first_answers_.fill(FirstAnswer{});
   }
   record->last_answered = answers_sample;
-  // Samples answered for the first time (usually one; after a gap, every one skipped).
-  const uint64_t first_new = std::max(newest_answered_ + 1, answers_sample > kAnswerRing ? answers_sample - kAnswerRing + 1 : 1);
-  for (uint64_t sample = first_new; sample <= answers_sample; ++sample) {
+  if (answers_sample <= newest_answered_) return;
+  // Samples answered for the first time (usually one; after a gap, every one skipped). At most
+  // the ring's worth, counted down from the newest: bounded work and no counter that can wrap,
+  // whatever number a command carries.
+  const uint64_t fresh = std::min<uint64_t>(answers_sample - newest_answered_, kAnswerRing);
+  for (uint64_t i = 0; i < fresh; ++i) {
+    const uint64_t sample = answers_sample - i;
     first_answers_[sample % kAnswerRing] = FirstAnswer{sample, now_ns};
   }
-  newest_answered_ = std::max(newest_answered_, answers_sample);
+  newest_answered_ = answers_sample;
 }
 
 std::string DriverCore::BestAlive(int64_t now_ns, const std::string& excluded) const {
@@ -197,8 +235,9 @@ std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCom
     Obey(id, reason);
   }
 
-  // Apply: clamp to the ranges, then limit the slew over the bench time since the last command,
-  // from where the current motion has the waveplates at this command's time.
+  // Apply: clamp to the ranges, then limit the slew over the driver's own time since the last
+  // applied command (never the command's timestamps), from where the current motion has the
+  // waveplates at this command's time.
   const int n = chain_.control_count();
   const int64_t start_ns = command.sample_time_ns();
   bus::AppliedTrajectory motion = applied_;
@@ -206,29 +245,26 @@ std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCom
   const ControlVector base = motion.phi;
   bool limited = false;
   const double max_step =
-      settings_.max_slew_per_s > 0.0 && applied_any_
-          ? settings_.max_slew_per_s *
-                std::max(0.0, static_cast<double>(start_ns - last_applied_sample_time_ns_) * 1e-9)
-          : INFINITY;
-  const double max_rate = settings_.max_slew_per_s > 0.0 ? settings_.max_slew_per_s : INFINITY;
+      applied_any_ ? max_slew_per_s_ * static_cast<double>(std::max<int64_t>(0, now_ns - last_applied_ns_)) * 1e-9
+                   : INFINITY;
   const bool has_rate = !command.phi_rate_per_s().empty();
-  int64_t end_ns = start_ns + static_cast<int64_t>(settings_.max_ramp_s * 1e9);
+  const int64_t max_ramp_ns = DurationNs(settings_.max_ramp_s);
+  int64_t end_ns = SaturatingAdd(start_ns, max_ramp_ns);
   bool moving = false;
   for (int i = 0; i < n; ++i) {
     const double wanted = command.phi()[static_cast<size_t>(i)];
-    double value = wanted;
-    const auto& range = chain_.controls()[static_cast<size_t>(i)].range;
-    if (range) value = range->Clamp(value);
+    const ControlRange& range = ranges_[static_cast<size_t>(i)];
+    double value = range.Clamp(wanted);
     value = std::clamp(value, base[i] - max_step, base[i] + max_step);
     const double wanted_rate = has_rate ? command.phi_rate_per_s()[static_cast<size_t>(i)] : 0.0;
-    double rate = std::clamp(wanted_rate, -max_rate, max_rate);
-    if (range && rate != 0.0) {
+    double rate = std::clamp(wanted_rate, -max_slew_per_s_, max_slew_per_s_);
+    if (rate != 0.0) {
       // The ramp stops when the first stage reaches its range end; one already there gets none.
-      const double room = rate > 0.0 ? range->max - value : value - range->min;
+      const double room = rate > 0.0 ? range.max - value : value - range.min;
       if (room <= 0.0) {
         rate = 0.0;
-      } else {
-        end_ns = std::min(end_ns, start_ns + static_cast<int64_t>(room / std::abs(rate) * 1e9));
+      } else if (const int64_t room_ns = DurationNs(room / std::abs(rate)); room_ns < max_ramp_ns) {
+        end_ns = std::min(end_ns, SaturatingAdd(start_ns, room_ns));
       }
     }
     const bool clipped = value != wanted || rate != wanted_rate;
@@ -248,7 +284,7 @@ std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCom
   }
   applied_ = backend_->Applied();
   applied_any_ = true;
-  last_applied_sample_time_ns_ = start_ns;
+  last_applied_ns_ = now_ns;
   ++applied_count_;
   if (limited) ++limited_;
   Answer(command, wall_ns);

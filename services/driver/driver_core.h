@@ -24,16 +24,19 @@
 // Tick() runs when the next such deadline is due (at most every 0.25 ms).
 //
 // Every command is checked (CheckCommandShape: stage count, NaN/Inf, oversized) and a bad one
-// is counted and reported, never applied. A good one is clamped to each stage's range and
-// slew-limited (max_slew_per_s × the bench time since the last applied command); the state
-// says which stages were limited.
+// is counted and reported, never applied. A good one is clamped to each control's range and
+// slew-limited (max_slew_per_s × the driver's own time since the last applied command: a
+// command's timestamps never widen the limit); the state says which stages were limited. The
+// range and the slew limit are the device's own (WaveplateBackend::limits(), finite), narrowed
+// by the scenario's stage ranges and --max-slew-per-s, never removed. Bookkeeping is bounded
+// and wrap-safe: no number a command carries makes the driver loop or overflow.
 //
 // Ramps. A command may carry φ̇ (phi_rate_per_s): the waveplates then move along
 // φ + φ̇·(t − sample_time) in bench time, so a command that arrived late is where it should be
 // now, whatever the loop's delay and its jitter. The motion is bounded: it stops after
 // max_ramp_s (the next command normally replaces it long before), or when the first stage
 // reaches its range end (a stage already at its end with φ̇ pointing out gets no rate), and
-// |φ̇| ≤ max_slew_per_s. Holding turns the motion into the point where it ends, with no rate.
+// |φ̇| ≤ the slew limit. Holding turns the motion into the point where it ends, with no rate.
 //
 // Bumpless switching is the controllers' part: a standby controller follows the applied φ from
 // the state, so its first obeyed command continues from there.
@@ -55,7 +58,7 @@ namespace dpc::services {
 struct DriverSettings {
   std::string bench_id = "bench1";
   std::string driver_id = "driver";
-  double max_slew_per_s = 0.0;        ///< φ units per second of bench time; 0: no limit
+  double max_slew_per_s = 0.0;        ///< φ units per second; 0: the device's own limit
   double min_silence_s = 1.5e-3;      ///< shortest silence that counts as a dead controller
   double silence_intervals = 8.0;     ///< or this many of its command intervals, if longer
   double holding_state_period_s = 5e-3;  ///< state heartbeat while holding
@@ -65,7 +68,8 @@ struct DriverSettings {
 class DriverCore {
  public:
   /// `stages` validated (ValidateDeviceStages); `backend` outlives the core and starts at
-  /// `initial_phi` (inside the ranges).
+  /// `initial_phi` (inside the ranges). Throws std::invalid_argument if the backend's limits are
+  /// not finite and positive.
   DriverCore(std::vector<StageConfig> stages, DriverSettings settings, WaveplateBackend* backend);
 
   /// A command arrived at `now_ns` (monotonic) / `wall_ns` (wall clock). Returns the state to
@@ -93,6 +97,8 @@ class DriverCore {
   const std::string& obeyed() const { return obeyed_; }
   bool holding() const { return obeyed_.empty(); }
   int control_count() const { return chain_.control_count(); }
+  /// The slew limit in force (the device's, or --max-slew-per-s if lower), φ units per second.
+  double max_slew_per_s() const { return max_slew_per_s_; }
   uint64_t commands_rejected() const { return rejected_; }
   const std::string& last_rejection() const { return last_rejection_; }
 
@@ -142,6 +148,8 @@ class DriverCore {
   WaveplateChain chain_;
   DriverSettings settings_;
   WaveplateBackend* backend_;
+  std::vector<ControlRange> ranges_;   ///< per control: the device's range ∩ the stage's
+  double max_slew_per_s_ = 0.0;        ///< the device's limit, or the setting if lower
   std::map<std::string, ControllerRecord> controllers_;
 
   std::string obeyed_;               ///< "" while holding
@@ -153,7 +161,7 @@ class DriverCore {
   std::string reason_;
   bus::AppliedTrajectory applied_;  ///< what the backend does (its Applied())
   std::vector<bool> saturated_;
-  int64_t last_applied_sample_time_ns_ = 0;
+  int64_t last_applied_ns_ = 0;       ///< the driver's clock when the last command was applied
   bool applied_any_ = false;
   uint64_t answers_sample_ = 0;
   int64_t sample_time_ns_ = 0;

@@ -31,7 +31,8 @@ int Run(int argc, char** argv) {
   DriverSettings settings;
   app.add_option("--id", settings.driver_id, "Driver id")->capture_default_str();
   app.add_option("--max-slew-per-s", settings.max_slew_per_s,
-                 "Slew-rate limit of every control, φ units per second of bench time (0: none)")
+                 "Slew-rate limit of every control, φ units per second of the driver's clock (0: "
+                 "the device's own limit; a value above it is cut to it)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_option("--min-silence-s", settings.min_silence_s,
                  "The obeyed controller is dead when another answered a sample it did not this long ago "
@@ -88,7 +89,7 @@ int Run(int argc, char** argv) {
     auto target_writer = participant.MakeWriter<msg::Target>();
     auto reply_writer = participant.MakeWriter<msg::TargetReply>();
     device_writer->Write(bus::DescribeDevice(scenario.stages, common.bench_id, settings.driver_id,
-                                             settings.max_slew_per_s, settings.max_ramp_s));
+                                             core.max_slew_per_s(), settings.max_ramp_s));
     uint64_t target_revision = 1;
     target_writer->Write(bus::TargetMessage(scenario.target, common.bench_id, target_revision, ""));
 
@@ -167,7 +168,7 @@ int Run(int argc, char** argv) {
     commands.reset();
     requests.reset();
     spdlog::info("stopping on signal {}", signals.signal());
-  } catch (const bus::BusError& e) {
+  } catch (const std::exception& e) {  // bus::BusError, or a backend the driver cannot use
     spdlog::error("{}", e.what());
     return kExitRuntimeError;
   }

@@ -14,9 +14,18 @@
 
 namespace dpc::services {
 
+/// What the device can do at most, whatever it is told: finite bounds that a scenario or the
+/// driver's options may narrow, never remove.
+struct DeviceLimits {
+  double max_abs_phi = 100.0;        ///< every control stays in [−max_abs_phi, max_abs_phi]
+  double max_slew_per_s = 1e5;       ///< |dφ/dt| of every control, φ units per second
+};
+
 class WaveplateBackend {
  public:
   virtual ~WaveplateBackend() = default;
+  /// The device's own bounds (finite, positive).
+  virtual DeviceLimits limits() const = 0;
   /// Drives the waveplates along `motion` (already inside the ranges and slew limits). Returns
   /// an empty string on success, else what went wrong (the driver then holds and reports it).
   virtual std::string Apply(const bus::AppliedTrajectory& motion) = 0;
@@ -25,14 +34,18 @@ class WaveplateBackend {
   virtual std::string name() const = 0;
 };
 
-/// The simulated device: applies instantly and exactly. The optics (S_out from φ) are simulated
-/// by the polarimeter service from the state the driver publishes, which carries the motion.
+/// The simulated device: applies instantly and exactly, within its limits (by default ±100 φ
+/// units and 1e5 φ units per second: far beyond what a control law asks of it, finite so that no
+/// command can drive it to absurd values). The optics (S_out from φ) are simulated by the
+/// polarimeter service from the state the driver publishes, which carries the motion.
 class SimulatedWaveplates final : public WaveplateBackend {
  public:
-  explicit SimulatedWaveplates(const ControlVector& initial_phi) {
+  explicit SimulatedWaveplates(const ControlVector& initial_phi, DeviceLimits limits = {})
+      : limits_(limits) {
     motion_.phi = initial_phi;
     motion_.rate_per_s = ControlVector::Zero(initial_phi.size());
   }
+  DeviceLimits limits() const override { return limits_; }
   std::string Apply(const bus::AppliedTrajectory& motion) override {
     motion_ = motion;
     return {};
@@ -41,6 +54,7 @@ class SimulatedWaveplates final : public WaveplateBackend {
   std::string name() const override { return "simulated"; }
 
  private:
+  DeviceLimits limits_;
   bus::AppliedTrajectory motion_;
 };
 

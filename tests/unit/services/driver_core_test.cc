@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <optional>
 
 #include "dpc/bus/message_conversion.h"
@@ -229,7 +230,7 @@ TEST(DriverCoreLimits, ClampsToTheStageRangeAndReportsSaturation) {
   EXPECT_EQ(state->commands_limited(), 1u);
 }
 
-TEST(DriverCoreLimits, LimitsTheSlewOverBenchTime) {
+TEST(DriverCoreLimits, LimitsTheSlewOverTheDriversTime) {
   DriverSettings settings;
   settings.max_slew_per_s = 100.0;  // 0.01 per 100 µs
   SimulatedWaveplates backend(ControlVector::Zero(3));
@@ -299,15 +300,82 @@ TEST_F(DriverCoreTest, TheNextCommandStartsFromWhereTheRampHasTheWaveplates) {
   DriverCore core(StagesFromAxes("131"), settings, &backend);
   ASSERT_TRUE(core.OnCommand(RampCommand({0.0, 0.0, 0.0}, {15.0, 0.0, 0.0}, 1, 0), 0, 0));
   // 100 µs later the ramp has φ0 at 0.0015; a command for 0.004 may step 0.002 from there.
-  auto state = core.OnCommand(RampCommand({0.004, 0.0, 0.0}, {15.0, 0.0, 0.0}, 2, 100 * kUs), 0, 0);
+  auto state = core.OnCommand(RampCommand({0.004, 0.0, 0.0}, {15.0, 0.0, 0.0}, 2, 100 * kUs), 100 * kUs, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_NEAR(state->phi_applied()[0], 0.0035, 1e-12);
   EXPECT_EQ(state->saturated(), std::vector<bool>({true, false, false}));
   // A rate above the slew limit is cut to it.
-  state = core.OnCommand(RampCommand({0.0035, 0.0, 0.0}, {50.0, -50.0, 1.0}, 3, 200 * kUs), 0, 0);
+  state = core.OnCommand(RampCommand({0.0035, 0.0, 0.0}, {50.0, -50.0, 1.0}, 3, 200 * kUs), 200 * kUs, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_EQ(state->phi_rate_per_s(), std::vector<double>({20.0, -20.0, 1.0}));
   EXPECT_EQ(state->saturated(), std::vector<bool>({true, true, false}));
+}
+
+TEST(DriverCoreLimits, TheSlewBudgetIsTheDriversOwnTimeNotTheCommandsTimestamps) {
+  DriverSettings settings;
+  settings.max_slew_per_s = 20.0;  // 0.002 per 100 µs of the driver's clock
+  SimulatedWaveplates backend(ControlVector::Zero(3));
+  DriverCore core(StagesFromAxes("131"), settings, &backend);
+  ASSERT_TRUE(core.OnCommand(Command("A", 0, {0.0, 0.0, 0.0}, 1, 0), 0, 0));
+  // The command claims its sample is 4e18 ns (127 years) later; it arrives 100 µs later.
+  auto state = core.OnCommand(Command("A", 0, {0.906, 0.0, 0.0}, 2, 4'000'000'000'000'000'000), 100 * kUs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_NEAR(state->phi_applied()[0], 0.002, 1e-12);
+  EXPECT_EQ(state->saturated(), std::vector<bool>({true, false, false}));
+  // Nor does a timestamp from the far past, or a command that arrives at the same instant.
+  state = core.OnCommand(Command("A", 0, {0.906, 0.0, 0.0}, 3, std::numeric_limits<int64_t>::min()), 100 * kUs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_NEAR(state->phi_applied()[0], 0.002, 1e-12);
+}
+
+TEST(DriverCoreLimits, EveryCommandMeetsTheDevicesOwnFiniteLimits) {
+  // No range in the scenario and no --max-slew-per-s: the device's own limits still hold.
+  SimulatedWaveplates backend(ControlVector::Zero(3), DeviceLimits{2.0, 50.0});
+  DriverCore core(StagesFromAxes("131"), DriverSettings{}, &backend);
+  EXPECT_EQ(core.max_slew_per_s(), 50.0);
+  auto state = core.OnCommand(RampCommand({1e6, -1e6, 0.5}, {1e300, -1e300, 1.0}, 1, 0), 0, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->phi_applied(), std::vector<double>({2.0, -2.0, 0.5}));
+  // At its range ends, the stages pushing outwards get no rate; the third is cut to the slew.
+  EXPECT_EQ(state->phi_rate_per_s(), std::vector<double>({0.0, 0.0, 1.0}));
+  EXPECT_EQ(state->saturated(), std::vector<bool>({true, true, false}));
+  for (int64_t t : {0L, 1'000'000'000L, std::numeric_limits<int64_t>::max()}) {
+    const ControlVector phi = At(*state, t);
+    EXPECT_LE(phi.cwiseAbs().maxCoeff(), 2.0) << t;
+  }
+  // A setting above the device's limit is cut to it; one below narrows it.
+  DriverSettings wide;
+  wide.max_slew_per_s = 1e9;
+  EXPECT_EQ(DriverCore(StagesFromAxes("131"), wide, &backend).max_slew_per_s(), 50.0);
+  DriverSettings narrow;
+  narrow.max_slew_per_s = 5.0;
+  EXPECT_EQ(DriverCore(StagesFromAxes("131"), narrow, &backend).max_slew_per_s(), 5.0);
+  // A device without finite limits is refused.
+  SimulatedWaveplates unbounded(ControlVector::Zero(3), DeviceLimits{INFINITY, 1.0});
+  EXPECT_THROW(DriverCore(StagesFromAxes("131"), DriverSettings{}, &unbounded), std::invalid_argument);
+}
+
+TEST(DriverCoreLimits, ARampNearTheEndOfTimeNeitherOverflowsNorRunsForever) {
+  SimulatedWaveplates backend(ControlVector::Zero(3));
+  DriverCore core(StagesFromAxes("131"), DriverSettings{}, &backend);
+  const int64_t late = std::numeric_limits<int64_t>::max() - 1000;
+  auto state = core.OnCommand(RampCommand({0.1, 0.0, 0.0}, {1e-300, 0.0, 0.0}, 1, late), 0, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_GE(state->ramp_end_time_ns(), state->ramp_start_time_ns());
+  EXPECT_NEAR(At(*state, std::numeric_limits<int64_t>::max())[0], 0.1, 1e-12);
+}
+
+TEST_F(DriverCoreTest, ACommandAnsweringTheLastSampleNumberLeavesTheDriverResponsive) {
+  // 2^64 − 1: the driver once looped forever on it, holding its lock.
+  ASSERT_TRUE(core_.OnCommand(Command("A", 0, {0.1, 0.1, 0.1}, 1), 0, 0));
+  auto state = core_.OnCommand(Command("A", 0, {0.2, 0.2, 0.2}, std::numeric_limits<uint64_t>::max()), 100 * kUs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->answers_sample(), std::numeric_limits<uint64_t>::max());
+  // States keep coming, and a bench that numbers from 1 again is followed.
+  state = core_.OnCommand(Command("A", 0, {0.3, 0.3, 0.3}, 2), 200 * kUs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->answers_sample(), 2u);
+  EXPECT_TRUE(core_.Tick(5 * kMs, 0).has_value());
 }
 
 TEST(DriverCoreLimits, ARampStopsAtTheFirstRangeEnd) {
