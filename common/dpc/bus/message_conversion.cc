@@ -148,9 +148,20 @@ std::string CheckStateShape(const msg::WaveplateState& state, int control_count)
   }
   if (std::string reason = CheckFinite(state.phi_applied(), "phi_applied"); !reason.empty()) return reason;
   if (std::string reason = CheckRates(state.phi_rate_per_s(), controls); !reason.empty()) return reason;
-  if (!state.phi_rate_per_s().empty() && state.ramp_end_time_ns() < state.ramp_start_time_ns()) {
-    return fmt::format("ramp_end_time_ns {} is before ramp_start_time_ns {}", state.ramp_end_time_ns(),
-                       state.ramp_start_time_ns());
+  if (state.mode() != msg::DRIVER_ACTIVE && state.mode() != msg::DRIVER_HOLDING) {
+    return fmt::format("mode {} is not a driver mode", static_cast<int>(state.mode()));
+  }
+  if (!state.phi_rate_per_s().empty()) {
+    if (state.ramp_end_time_ns() < state.ramp_start_time_ns()) {
+      return fmt::format("ramp_end_time_ns {} is before ramp_start_time_ns {}", state.ramp_end_time_ns(),
+                         state.ramp_start_time_ns());
+    }
+    // Overflow-safe: the difference of two arbitrary int64 does not fit an int64.
+    const uint64_t ramp_ns = static_cast<uint64_t>(state.ramp_end_time_ns()) -
+                             static_cast<uint64_t>(state.ramp_start_time_ns());
+    if (ramp_ns > kMaxRampNs) {
+      return fmt::format("the ramp lasts {} ns, longer than any driver ramps ({} ns)", ramp_ns, kMaxRampNs);
+    }
   }
   return {};
 }

@@ -51,9 +51,12 @@ struct AppliedTrajectory {
   }
 };
 
+/// The longest ramp a driver describes (its --max-ramp-s is at most 1 s).
+inline constexpr uint64_t kMaxRampNs = 1'000'000'000;
+
 /// Empty if the state fits a device of `control_count` controls: one finite phi_applied per
-/// control, phi_rate_per_s empty or one finite value per control, ramp_end_time_ns not before
-/// ramp_start_time_ns.
+/// control, phi_rate_per_s empty or one finite value per control, a known mode, a ramp from
+/// ramp_start_time_ns to ramp_end_time_ns of at most kMaxRampNs.
 std::string CheckStateShape(const msg::WaveplateState& state, int control_count);
 
 /// Real-time. The motion of a state that passed CheckStateShape, into `out` (its vectors sized

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "dpc/config/scenario_error.h"
 
@@ -54,6 +55,16 @@ TEST(CheckStateShape, NamesTheProblem) {
   s.ramp_start_time_ns(5'000'000);
   s.ramp_end_time_ns(4'000'000);
   EXPECT_NE(CheckStateShape(s, 3).find("ramp_end_time_ns"), std::string::npos);
+  // A ramp across the whole int64 range would overflow t − start in every reader.
+  s.ramp_start_time_ns(std::numeric_limits<int64_t>::min());
+  s.ramp_end_time_ns(std::numeric_limits<int64_t>::max());
+  EXPECT_NE(CheckStateShape(s, 3).find("longer than any driver ramps"), std::string::npos);
+  s.ramp_start_time_ns(0);
+  s.ramp_end_time_ns(1'000'000'000);
+  EXPECT_EQ(CheckStateShape(s, 3), "");
+  // Enumerations are range-checked: a mode no driver sends is refused.
+  s.mode(static_cast<msg::DriverMode>(7));
+  EXPECT_NE(CheckStateShape(s, 3).find("mode 7"), std::string::npos);
 }
 
 TEST(AppliedTrajectory, MovesBetweenItsStartAndEndOnly) {
