@@ -102,14 +102,7 @@ std::string DriverCore::DescribeBehind(const std::string& id, const ControllerRe
 }
 
 void DriverCore::NoteAnswer(ControllerRecord* record, uint64_t answers_sample, int64_t now_ns) {
-  if (answers_sample == 0) return;  // answers no sample: says nothing about progress
-  if (answers_sample < record->last_answered) {
-    // The bench restarted and numbers its samples from 1 again: nobody is behind.
-    newest_answered_ = answers_sample - 1;
-    for (auto& [id, other] : controllers_) other.last_answered = newest_answered_;
-    first_answers_.fill(FirstAnswer{});
-  }
-  record->last_answered = answers_sample;
+  record->last_answered = std::max(record->last_answered, answers_sample);
   if (answers_sample <= newest_answered_) return;
   // Samples answered for the first time (usually one; after a gap, every one skipped). At most
   // the ring's worth, counted down from the newest: bounded work and no counter that can wrap,
@@ -120,6 +113,15 @@ void DriverCore::NoteAnswer(ControllerRecord* record, uint64_t answers_sample, i
     first_answers_[sample % kAnswerRing] = FirstAnswer{sample, now_ns};
   }
   newest_answered_ = answers_sample;
+}
+
+bool DriverCore::OnSample(uint64_t sequence, int64_t sample_time_ns, int64_t publish_time_ns) {
+  if (!timeline_.OnSample(sequence, sample_time_ns, publish_time_ns)) return false;
+  // A new bench run numbers its samples from 1 again: nobody is behind.
+  newest_answered_ = 0;
+  for (auto& [id, record] : controllers_) record.last_answered = 0;
+  first_answers_.fill(FirstAnswer{});
+  return true;
 }
 
 std::string DriverCore::BestAlive(int64_t now_ns, const std::string& excluded) const {
@@ -158,9 +160,11 @@ void DriverCore::StopMotion() {
 }
 
 void DriverCore::Answer(const msg::WaveplateCommand& command, int64_t wall_ns) {
+  // The sample's times from the bench's own record, not from the command.
   answers_sample_ = command.answers_sample();
-  sample_time_ns_ = command.sample_time_ns();
-  sample_publish_time_ns_ = command.sample_publish_time_ns();
+  const std::optional<SampleTimeline::Sample> sample = timeline_.Find(answers_sample_);
+  sample_time_ns_ = sample ? sample->time_ns : timeline_.TimeOfNs(answers_sample_);
+  sample_publish_time_ns_ = sample ? sample->publish_time_ns : 0;
   command_receive_time_ns_ = wall_ns;
 }
 
@@ -180,6 +184,12 @@ std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCom
     Answer(command, wall_ns);
     std::fill(saturated_.begin(), saturated_.end(), false);
     return Publishable(wall_ns);
+  }
+  if (std::string reason = timeline_.CheckAnswer(command.answers_sample(), command.sample_time_ns());
+      !reason.empty()) {
+    // Not answered: the sample it names is not one the bench published.
+    Reject(id, reason);
+    return std::nullopt;
   }
 
   // Liveness and priority of this controller.
@@ -239,7 +249,7 @@ std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCom
   // applied command (never the command's timestamps), from where the current motion has the
   // waveplates at this command's time.
   const int n = chain_.control_count();
-  const int64_t start_ns = command.sample_time_ns();
+  const int64_t start_ns = timeline_.TimeOfNs(command.answers_sample());
   bus::AppliedTrajectory motion = applied_;
   applied_.At(start_ns, &motion.phi);
   const ControlVector base = motion.phi;

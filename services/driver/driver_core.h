@@ -23,8 +23,9 @@
 //     2-ms timeout, 30 at 1.5 ms (the default).
 // Tick() runs when the next such deadline is due (at most every 0.25 ms).
 //
-// Every command is checked (CheckCommandShape: stage count, NaN/Inf, oversized) and a bad one
-// is counted and reported, never applied. A good one is clamped to each control's range and
+// Every command is checked (CheckCommandShape: stage count, NaN/Inf, oversized; and against the
+// driver's own record of the bench's samples, SampleTimeline: it must answer a sample the bench
+// published, at that sample's time) and a bad one is counted and reported, never applied. A good one is clamped to each control's range and
 // slew-limited (max_slew_per_s × the driver's own time since the last applied command: a
 // command's timestamps never widen the limit); the state says which stages were limited. The
 // range and the slew limit are the device's own (WaveplateBackend::limits(), finite), narrowed
@@ -32,8 +33,9 @@
 // and wrap-safe: no number a command carries makes the driver loop or overflow.
 //
 // Ramps. A command may carry φ̇ (phi_rate_per_s): the waveplates then move along
-// φ + φ̇·(t − sample_time) in bench time, so a command that arrived late is where it should be
-// now, whatever the loop's delay and its jitter. The motion is bounded: it stops after
+// φ + φ̇·(t − t_sample) in bench time (t_sample: the answered sample's time in the driver's
+// record), so a command that arrived late is where it should be now, whatever the loop's
+// delay and its jitter. The motion is bounded: it stops after
 // max_ramp_s (the next command normally replaces it long before), or when the first stage
 // reaches its range end (a stage already at its end with φ̇ pointing out gets no rate), and
 // |φ̇| ≤ the slew limit. Holding turns the motion into the point where it ends, with no rate.
@@ -51,6 +53,7 @@
 #include "dpc/config/scenario_config.h"
 #include "dpc/msg/bench.h"
 #include "dpc/optics/waveplate_chain.h"
+#include "sample_timeline.h"
 #include "waveplate_backend.h"
 
 namespace dpc::services {
@@ -71,6 +74,10 @@ class DriverCore {
   /// `initial_phi` (inside the ranges). Throws std::invalid_argument if the backend's limits are
   /// not finite and positive.
   DriverCore(std::vector<StageConfig> stages, DriverSettings settings, WaveplateBackend* backend);
+
+  /// A sample the polarimeter published (the driver's own record of the bench: SampleTimeline).
+  /// Returns true if it shows a new bench run (numbering from 1 again): nobody is behind.
+  bool OnSample(uint64_t sequence, int64_t sample_time_ns, int64_t publish_time_ns);
 
   /// A command arrived at `now_ns` (monotonic) / `wall_ns` (wall clock). Returns the state to
   /// publish: after applying it (obeyed controller), after refusing it (so a lockstep bench
@@ -95,6 +102,8 @@ class DriverCore {
   msg::WaveplateState Publishable(int64_t wall_ns);
 
   const std::string& obeyed() const { return obeyed_; }
+  /// The newest sample the bench published, as far as the driver knows (0: none yet).
+  uint64_t newest_sample() const { return timeline_.newest(); }
   bool holding() const { return obeyed_.empty(); }
   int control_count() const { return chain_.control_count(); }
   /// The slew limit in force (the device's, or --max-slew-per-s if lower), φ units per second.
@@ -126,8 +135,7 @@ class DriverCore {
   /// "<id> silent for X ms, N samples behind".
   std::string DescribeBehind(const std::string& id, const ControllerRecord& record, int64_t now_ns) const;
   bool Alive(const ControllerRecord& record, int64_t now_ns) const;
-  /// Notes the sample a command answers; a bench that restarted (numbering from 1 again)
-  /// starts everyone afresh.
+  /// Notes the sample a command answers (one that passed SampleTimeline::CheckAnswer).
   void NoteAnswer(ControllerRecord* record, uint64_t answers_sample, int64_t now_ns);
   /// When each of the latest kAnswerRing samples was first answered, by any controller.
   static constexpr size_t kAnswerRing = 1024;
@@ -149,6 +157,7 @@ class DriverCore {
   DriverSettings settings_;
   WaveplateBackend* backend_;
   std::vector<ControlRange> ranges_;   ///< per control: the device's range ∩ the stage's
+  SampleTimeline timeline_;            ///< the bench's samples, as the polarimeter published them
   double max_slew_per_s_ = 0.0;        ///< the device's limit, or the setting if lower
   std::map<std::string, ControllerRecord> controllers_;
 

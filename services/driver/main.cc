@@ -110,6 +110,15 @@ int Run(int argc, char** argv) {
       std::lock_guard<std::mutex> lock(mutex);
       publish(core.Publishable(bus::WallClockNs()));
     }
+    // The driver's own record of the bench's samples: a command is judged by it (SampleTimeline).
+    auto samples = participant.MakeReader<msg::StokesSample>(
+        common.bench_id, [&](const msg::StokesSample& sample, const auto&) {
+          if (sample.sequence_number() == 0) return;
+          std::lock_guard<std::mutex> lock(mutex);
+          if (core.OnSample(sample.sequence_number(), sample.sample_time_ns(), sample.publish_time_ns())) {
+            spdlog::info("the bench started a new run (sample {})", sample.sequence_number());
+          }
+        });
     RejectionLog rejections("rejected command");
     auto commands = participant.MakeReader<msg::WaveplateCommand>(
         common.bench_id, [&](const msg::WaveplateCommand& command, const auto&) {
@@ -167,6 +176,7 @@ int Run(int argc, char** argv) {
     ticker.join();
     commands.reset();
     requests.reset();
+    samples.reset();
     spdlog::info("stopping on signal {}", signals.signal());
   } catch (const std::exception& e) {  // bus::BusError, or a backend the driver cannot use
     spdlog::error("{}", e.what());

@@ -27,6 +27,16 @@ msg::WaveplateCommand Command(const std::string& id, int priority, std::vector<d
   return c;
 }
 
+/// The bench publishes the sample a command answers (if it is newer than any so far), then the
+/// command arrives: what the driver sees on a running bench.
+std::optional<msg::WaveplateState> Send(DriverCore& core, const msg::WaveplateCommand& command,
+                                        int64_t now_ns, int64_t wall_ns) {
+  if (command.answers_sample() > core.newest_sample()) {
+    core.OnSample(command.answers_sample(), command.sample_time_ns(), wall_ns);
+  }
+  return core.OnCommand(command, now_ns, wall_ns);
+}
+
 class DriverCoreTest : public ::testing::Test {
  protected:
   DriverCoreTest() : backend_(ControlVector::Zero(3)), core_(StagesFromAxes("131"), DriverSettings{}, &backend_) {}
@@ -46,7 +56,7 @@ TEST_F(DriverCoreTest, StartsHoldingWithTheBackendsPhi) {
 }
 
 TEST_F(DriverCoreTest, AppliesTheFirstControllersCommandAndAnswersItsSample) {
-  auto state = core_.OnCommand(Command("A", 0, {0.1, 0.2, 0.3}, 7), 1 * kMs, 5);
+  auto state = Send(core_, Command("A", 0, {0.1, 0.2, 0.3}, 7), 1 * kMs, 5);
   ASSERT_TRUE(state.has_value());
   EXPECT_EQ(state->mode(), msg::DRIVER_ACTIVE);
   EXPECT_EQ(state->obeyed_controller_id().to_string(), "A");
@@ -56,10 +66,10 @@ TEST_F(DriverCoreTest, AppliesTheFirstControllersCommandAndAnswersItsSample) {
 }
 
 TEST_F(DriverCoreTest, RefusesMalformedCommandsAndNeverAppliesThem) {
-  ASSERT_TRUE(core_.OnCommand(Command("A", 0, {0.1, 0.2, 0.3}, 1), 1 * kMs, 0));
+  ASSERT_TRUE(Send(core_, Command("A", 0, {0.1, 0.2, 0.3}, 1), 1 * kMs, 0));
   for (const auto& phi : {std::vector<double>{NAN, 0, 0}, std::vector<double>{0, INFINITY, 0},
                           std::vector<double>{0.1, 0.2}, std::vector<double>(17, 0.0)}) {
-    auto state = core_.OnCommand(Command("A", 0, phi, 2), 1 * kMs + 10 * kUs, 0);
+    auto state = Send(core_, Command("A", 0, phi, 2), 1 * kMs + 10 * kUs, 0);
     ASSERT_TRUE(state.has_value()) << "the obeyed controller's bad command is answered";
     EXPECT_EQ(state->phi_applied(), std::vector<double>({0.1, 0.2, 0.3}));
   }
@@ -70,7 +80,7 @@ TEST_F(DriverCoreTest, RefusesMalformedCommandsAndNeverAppliesThem) {
                            std::vector<double>{1.0, 1.0}}) {
     msg::WaveplateCommand command = Command("A", 0, {0.5, 0.5, 0.5}, 2);
     command.phi_rate_per_s(rate);
-    auto state = core_.OnCommand(command, 1 * kMs + 10 * kUs, 0);
+    auto state = Send(core_, command, 1 * kMs + 10 * kUs, 0);
     ASSERT_TRUE(state.has_value());
     EXPECT_EQ(state->phi_applied(), std::vector<double>({0.1, 0.2, 0.3}));
     EXPECT_TRUE(state->phi_rate_per_s().empty());
@@ -78,18 +88,18 @@ TEST_F(DriverCoreTest, RefusesMalformedCommandsAndNeverAppliesThem) {
   }
   EXPECT_EQ(core_.commands_rejected(), 7u);
   // A stranger's bad command is counted too, but not answered.
-  EXPECT_FALSE(core_.OnCommand(Command("B", 99, {NAN, 0, 0}, 3), 1 * kMs + 20 * kUs, 0));
+  EXPECT_FALSE(Send(core_, Command("B", 99, {NAN, 0, 0}, 3), 1 * kMs + 20 * kUs, 0));
   EXPECT_EQ(core_.commands_rejected(), 8u);
   EXPECT_EQ(core_.obeyed(), "A");
 }
 
 TEST_F(DriverCoreTest, HigherPriorityTakesOverLowerIsIgnored) {
-  ASSERT_TRUE(core_.OnCommand(Command("low", 0, {0.1, 0.1, 0.1}, 1), 1 * kMs, 0));
-  auto state = core_.OnCommand(Command("high", 5, {0.2, 0.2, 0.2}, 1), 1 * kMs + 10 * kUs, 0);
+  ASSERT_TRUE(Send(core_, Command("low", 0, {0.1, 0.1, 0.1}, 1), 1 * kMs, 0));
+  auto state = Send(core_, Command("high", 5, {0.2, 0.2, 0.2}, 1), 1 * kMs + 10 * kUs, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_EQ(state->obeyed_controller_id().to_string(), "high");
   EXPECT_EQ(state->controller_switches(), 2u);
-  EXPECT_FALSE(core_.OnCommand(Command("low", 0, {0.9, 0.9, 0.9}, 2), 1 * kMs + 100 * kUs, 0));
+  EXPECT_FALSE(Send(core_, Command("low", 0, {0.9, 0.9, 0.9}, 2), 1 * kMs + 100 * kUs, 0));
   EXPECT_EQ(backend_.Applied().phi, ControlVector::Constant(3, 0.2));
 }
 
@@ -99,8 +109,8 @@ int64_t TwoControllersAnswer(DriverCore* core, int first, int last) {
   int64_t t = 0;
   for (int k = first; k <= last; ++k) {
     t = (k - 1) * 100 * kUs;
-    core->OnCommand(Command("primary", 10, {0.1, 0.1, 0.1}, k), t, 0);
-    core->OnCommand(Command("standby", 0, {0.1, 0.1, 0.1}, k), t + 10 * kUs, 0);
+    Send(*core, Command("primary", 10, {0.1, 0.1, 0.1}, k), t, 0);
+    Send(*core, Command("standby", 0, {0.1, 0.1, 0.1}, k), t + 10 * kUs, 0);
   }
   return t;
 }
@@ -111,7 +121,7 @@ int64_t FailoverTime(DriverCore* core, std::optional<msg::WaveplateState>* switc
   for (int k = 51; k <= 100; ++k) {
     const int64_t t = (k - 1) * 100 * kUs;
     for (int64_t tick = t; tick < t + 100 * kUs; tick += 25 * kUs) {
-      auto state = tick == t + 25 * kUs ? core->OnCommand(Command("standby", 0, {0.1, 0.1, 0.1}, k), tick, 0)
+      auto state = tick == t + 25 * kUs ? Send(*core, Command("standby", 0, {0.1, 0.1, 0.1}, k), tick, 0)
                                         : core->Tick(tick, 0);
       if (core->obeyed() == "standby") {
         *switch_state = state;
@@ -144,8 +154,8 @@ TEST_F(DriverCoreTest, AStandbyOneSampleAheadAllTheTimeIsNoFailure) {
   // arrives: the primary is always "behind", never for long.
   int64_t t = 0;
   for (int k = 1; k <= 200; ++k, t += 100 * kUs) {
-    core_.OnCommand(Command("standby", 0, {0.1, 0.1, 0.1}, k + 1), t, 0);
-    core_.OnCommand(Command("primary", 10, {0.1, 0.1, 0.1}, k), t + 60 * kUs, 0);
+    Send(core_, Command("standby", 0, {0.1, 0.1, 0.1}, k + 1), t, 0);
+    Send(core_, Command("primary", 10, {0.1, 0.1, 0.1}, k), t + 60 * kUs, 0);
     EXPECT_FALSE(core_.Tick(t + 80 * kUs, 0).has_value());
     ASSERT_EQ(core_.obeyed(), "primary") << "sample " << k;
   }
@@ -160,12 +170,12 @@ TEST_F(DriverCoreTest, AStallOfEveryoneHoldsThenGivesControlBackToTheSameControl
   ASSERT_TRUE(state.has_value());
   EXPECT_EQ(state->mode(), msg::DRIVER_HOLDING);
   EXPECT_NE(state->reason().to_string().find("primary silent"), std::string::npos) << state->reason().to_string();
-  state = core_.OnCommand(Command("standby", 0, {0.7, 0.7, 0.7}, 51), t + 5 * kMs, 0);
+  state = Send(core_, Command("standby", 0, {0.7, 0.7, 0.7}, 51), t + 5 * kMs, 0);
   ASSERT_TRUE(state.has_value());  // answered (a lockstep bench waits for it), nothing applied
   EXPECT_EQ(state->mode(), msg::DRIVER_HOLDING);
   EXPECT_EQ(state->answers_sample(), 51u);
   EXPECT_EQ(state->phi_applied(), std::vector<double>({0.1, 0.1, 0.1}));
-  state = core_.OnCommand(Command("primary", 10, {0.2, 0.2, 0.2}, 51), t + 5 * kMs + 10 * kUs, 0);
+  state = Send(core_, Command("primary", 10, {0.2, 0.2, 0.2}, 51), t + 5 * kMs + 10 * kUs, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_EQ(core_.obeyed(), "primary");
   EXPECT_EQ(state->phi_applied(), std::vector<double>({0.2, 0.2, 0.2}));
@@ -178,15 +188,16 @@ TEST_F(DriverCoreTest, ARestartedBenchNumbersItsSamplesFromOneAndNobodyIsBehind)
   // A new polarimeter run: samples 1, 2, 3 … again, the standby's answer first each time.
   for (int k = 1; k <= 30; ++k) {
     const int64_t t = 5 * kMs + k * 100 * kUs;
-    EXPECT_FALSE(core_.OnCommand(Command("standby", 0, {0.1, 0.1, 0.1}, k), t, 0).has_value());
-    EXPECT_TRUE(core_.OnCommand(Command("primary", 10, {0.1, 0.1, 0.1}, k), t + 10 * kUs, 0).has_value());
+    EXPECT_EQ(core_.OnSample(k, 0, 0), k == 1) << "sample 1 again is a new bench run";
+    EXPECT_FALSE(Send(core_, Command("standby", 0, {0.1, 0.1, 0.1}, k), t, 0).has_value());
+    EXPECT_TRUE(Send(core_, Command("primary", 10, {0.1, 0.1, 0.1}, k), t + 10 * kUs, 0).has_value());
     EXPECT_FALSE(core_.Tick(t + 50 * kUs, 0).has_value());
     ASSERT_EQ(core_.obeyed(), "primary") << "sample " << k;
   }
 }
 
 TEST_F(DriverCoreTest, HoldsAndSaysWhyWhenNoControllerIsLeftThenResumes) {
-  ASSERT_TRUE(core_.OnCommand(Command("only", 0, {0.3, 0.2, 0.1}, 1), 0, 0));
+  ASSERT_TRUE(Send(core_, Command("only", 0, {0.3, 0.2, 0.1}, 1), 0, 0));
   EXPECT_FALSE(core_.Tick(1 * kMs, 0).has_value());
   auto state = core_.Tick(3 * kMs, 0);
   ASSERT_TRUE(state.has_value());
@@ -203,7 +214,7 @@ TEST_F(DriverCoreTest, HoldsAndSaysWhyWhenNoControllerIsLeftThenResumes) {
   int64_t obeyed_at = -1;
   for (int k = 2; k <= 50 && obeyed_at < 0; ++k) {
     const int64_t t = 20 * kMs + (k - 2) * 100 * kUs;
-    state = core_.OnCommand(Command("next", 0, {0.31, 0.2, 0.1}, k), t, 0);
+    state = Send(core_, Command("next", 0, {0.31, 0.2, 0.1}, k), t, 0);
     ASSERT_TRUE(state.has_value());
     EXPECT_EQ(state->answers_sample(), static_cast<uint64_t>(k));
     if (state->mode() == msg::DRIVER_ACTIVE) {
@@ -223,7 +234,7 @@ TEST(DriverCoreLimits, ClampsToTheStageRangeAndReportsSaturation) {
   stages[1].range = ControlRange{-0.5, 0.5};
   SimulatedWaveplates backend(ControlVector::Zero(3));
   DriverCore core(stages, DriverSettings{}, &backend);
-  auto state = core.OnCommand(Command("A", 0, {0.1, 0.9, -0.2}, 1), 0, 0);
+  auto state = Send(core, Command("A", 0, {0.1, 0.9, -0.2}, 1), 0, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_EQ(state->phi_applied(), std::vector<double>({0.1, 0.5, -0.2}));
   EXPECT_EQ(state->saturated(), std::vector<bool>({false, true, false}));
@@ -235,8 +246,8 @@ TEST(DriverCoreLimits, LimitsTheSlewOverTheDriversTime) {
   settings.max_slew_per_s = 100.0;  // 0.01 per 100 µs
   SimulatedWaveplates backend(ControlVector::Zero(3));
   DriverCore core(StagesFromAxes("131"), settings, &backend);
-  ASSERT_TRUE(core.OnCommand(Command("A", 0, {0.0, 0.0, 0.0}, 1, 0), 0, 0));
-  auto state = core.OnCommand(Command("A", 0, {0.5, -0.005, 0.0}, 2, 100 * kUs), 100 * kUs, 0);
+  ASSERT_TRUE(Send(core, Command("A", 0, {0.0, 0.0, 0.0}, 1, 0), 0, 0));
+  auto state = Send(core, Command("A", 0, {0.5, -0.005, 0.0}, 2, 100 * kUs), 100 * kUs, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_NEAR(state->phi_applied()[0], 0.01, 1e-12);
   EXPECT_NEAR(state->phi_applied()[1], -0.005, 1e-12);
@@ -262,7 +273,7 @@ ControlVector At(const msg::WaveplateState& state, int64_t t_ns) {
 
 TEST_F(DriverCoreTest, ARatedCommandMovesTheWaveplatesFromItsSampleTimeForAtMostTheRampLimit) {
   // Sample at bench time 10 ms; the command arrives whenever it arrives.
-  auto state = core_.OnCommand(RampCommand({0.1, 0.2, 0.3}, {10.0, 0.0, -5.0}, 1, 10 * kMs), 50 * kMs, 0);
+  auto state = Send(core_, RampCommand({0.1, 0.2, 0.3}, {10.0, 0.0, -5.0}, 1, 10 * kMs), 50 * kMs, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_EQ(state->phi_applied(), std::vector<double>({0.1, 0.2, 0.3}));
   EXPECT_EQ(state->phi_rate_per_s(), std::vector<double>({10.0, 0.0, -5.0}));
@@ -281,7 +292,7 @@ TEST_F(DriverCoreTest, ARatedCommandMovesTheWaveplatesFromItsSampleTimeForAtMost
 }
 
 TEST_F(DriverCoreTest, HoldingStopsTheMotionWhereItEnds) {
-  ASSERT_TRUE(core_.OnCommand(RampCommand({0.1, 0.2, 0.3}, {10.0, 0.0, -5.0}, 1, 0), 0, 0));
+  ASSERT_TRUE(Send(core_, RampCommand({0.1, 0.2, 0.3}, {10.0, 0.0, -5.0}, 1, 0), 0, 0));
   auto state = core_.Tick(3 * kMs, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_EQ(state->mode(), msg::DRIVER_HOLDING);
@@ -298,14 +309,14 @@ TEST_F(DriverCoreTest, TheNextCommandStartsFromWhereTheRampHasTheWaveplates) {
   settings.max_slew_per_s = 20.0;  // 0.002 per 100 µs
   SimulatedWaveplates backend(ControlVector::Zero(3));
   DriverCore core(StagesFromAxes("131"), settings, &backend);
-  ASSERT_TRUE(core.OnCommand(RampCommand({0.0, 0.0, 0.0}, {15.0, 0.0, 0.0}, 1, 0), 0, 0));
+  ASSERT_TRUE(Send(core, RampCommand({0.0, 0.0, 0.0}, {15.0, 0.0, 0.0}, 1, 0), 0, 0));
   // 100 µs later the ramp has φ0 at 0.0015; a command for 0.004 may step 0.002 from there.
-  auto state = core.OnCommand(RampCommand({0.004, 0.0, 0.0}, {15.0, 0.0, 0.0}, 2, 100 * kUs), 100 * kUs, 0);
+  auto state = Send(core, RampCommand({0.004, 0.0, 0.0}, {15.0, 0.0, 0.0}, 2, 100 * kUs), 100 * kUs, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_NEAR(state->phi_applied()[0], 0.0035, 1e-12);
   EXPECT_EQ(state->saturated(), std::vector<bool>({true, false, false}));
   // A rate above the slew limit is cut to it.
-  state = core.OnCommand(RampCommand({0.0035, 0.0, 0.0}, {50.0, -50.0, 1.0}, 3, 200 * kUs), 200 * kUs, 0);
+  state = Send(core, RampCommand({0.0035, 0.0, 0.0}, {50.0, -50.0, 1.0}, 3, 200 * kUs), 200 * kUs, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_EQ(state->phi_rate_per_s(), std::vector<double>({20.0, -20.0, 1.0}));
   EXPECT_EQ(state->saturated(), std::vector<bool>({true, true, false}));
@@ -316,16 +327,46 @@ TEST(DriverCoreLimits, TheSlewBudgetIsTheDriversOwnTimeNotTheCommandsTimestamps)
   settings.max_slew_per_s = 20.0;  // 0.002 per 100 µs of the driver's clock
   SimulatedWaveplates backend(ControlVector::Zero(3));
   DriverCore core(StagesFromAxes("131"), settings, &backend);
-  ASSERT_TRUE(core.OnCommand(Command("A", 0, {0.0, 0.0, 0.0}, 1, 0), 0, 0));
-  // The command claims its sample is 4e18 ns (127 years) later; it arrives 100 µs later.
-  auto state = core.OnCommand(Command("A", 0, {0.906, 0.0, 0.0}, 2, 4'000'000'000'000'000'000), 100 * kUs, 0);
+  ASSERT_TRUE(Send(core, Command("A", 0, {0.0, 0.0, 0.0}, 1, 0), 0, 0));
+  // The bench's sample 2 is at 100 µs; a command claiming 4e18 ns (127 years) for it is refused.
+  core.OnSample(2, 100 * kUs, 0);
+  EXPECT_FALSE(core.OnCommand(Command("A", 0, {0.906, 0.0, 0.0}, 2, 4'000'000'000'000'000'000), 100 * kUs, 0));
+  EXPECT_NE(core.last_rejection().find("is not the time of sample 2"), std::string::npos) << core.last_rejection();
+  // A command that tells the truth but arrives 100 µs after the last one steps 0.002.
+  auto state = core.OnCommand(Command("A", 0, {0.906, 0.0, 0.0}, 2, 100 * kUs), 100 * kUs, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_NEAR(state->phi_applied()[0], 0.002, 1e-12);
   EXPECT_EQ(state->saturated(), std::vector<bool>({true, false, false}));
-  // Nor does a timestamp from the far past, or a command that arrives at the same instant.
-  state = core.OnCommand(Command("A", 0, {0.906, 0.0, 0.0}, 3, std::numeric_limits<int64_t>::min()), 100 * kUs, 0);
+  // One that arrives at the same instant of the driver's clock does not move at all.
+  state = core.OnCommand(Command("A", 0, {0.906, 0.0, 0.0}, 2, 100 * kUs), 100 * kUs, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_NEAR(state->phi_applied()[0], 0.002, 1e-12);
+}
+
+TEST_F(DriverCoreTest, ACommandIsJudgedByTheBenchsRecordOfItsSample) {
+  core_.OnSample(1, 0, 11);
+  core_.OnSample(2, 100 * kUs, 22);
+  // Answering a sample the bench never published, far ahead of its newest: refused, unanswered.
+  EXPECT_FALSE(core_.OnCommand(Command("A", 0, {0.1, 0.1, 0.1}, 1000), 1 * kMs, 0));
+  EXPECT_NE(core_.last_rejection().find("the bench's newest sample is 2"), std::string::npos)
+      << core_.last_rejection();
+  EXPECT_FALSE(core_.OnCommand(Command("A", 0, {0.1, 0.1, 0.1}, 0), 1 * kMs, 0));
+  EXPECT_EQ(core_.commands_rejected(), 2u);
+  EXPECT_TRUE(core_.holding());
+  // A sample still on its way (one past the newest) is fine; its motion starts at the time the
+  // bench's period puts it at (200 µs), whatever the command says.
+  msg::WaveplateCommand ahead = Command("A", 0, {0.1, 0.1, 0.1}, 3, 99 * kMs);
+  ahead.phi_rate_per_s({1.0, 0.0, 0.0});
+  auto state = core_.OnCommand(ahead, 1 * kMs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->ramp_start_time_ns(), 200 * kUs);
+  EXPECT_EQ(state->sample_time_ns(), 200 * kUs);
+  // A recorded sample's times in the state are the bench's, not the command's.
+  msg::WaveplateCommand recorded = Command("A", 0, {0.1, 0.1, 0.1}, 2, 100 * kUs);
+  recorded.sample_publish_time_ns(-5);
+  state = core_.OnCommand(recorded, 2 * kMs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->sample_publish_time_ns(), 22);
 }
 
 TEST(DriverCoreLimits, EveryCommandMeetsTheDevicesOwnFiniteLimits) {
@@ -333,7 +374,7 @@ TEST(DriverCoreLimits, EveryCommandMeetsTheDevicesOwnFiniteLimits) {
   SimulatedWaveplates backend(ControlVector::Zero(3), DeviceLimits{2.0, 50.0});
   DriverCore core(StagesFromAxes("131"), DriverSettings{}, &backend);
   EXPECT_EQ(core.max_slew_per_s(), 50.0);
-  auto state = core.OnCommand(RampCommand({1e6, -1e6, 0.5}, {1e300, -1e300, 1.0}, 1, 0), 0, 0);
+  auto state = Send(core, RampCommand({1e6, -1e6, 0.5}, {1e300, -1e300, 1.0}, 1, 0), 0, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_EQ(state->phi_applied(), std::vector<double>({2.0, -2.0, 0.5}));
   // At its range ends, the stages pushing outwards get no rate; the third is cut to the slew.
@@ -359,7 +400,7 @@ TEST(DriverCoreLimits, ARampNearTheEndOfTimeNeitherOverflowsNorRunsForever) {
   SimulatedWaveplates backend(ControlVector::Zero(3));
   DriverCore core(StagesFromAxes("131"), DriverSettings{}, &backend);
   const int64_t late = std::numeric_limits<int64_t>::max() - 1000;
-  auto state = core.OnCommand(RampCommand({0.1, 0.0, 0.0}, {1e-300, 0.0, 0.0}, 1, late), 0, 0);
+  auto state = Send(core, RampCommand({0.1, 0.0, 0.0}, {1e-300, 0.0, 0.0}, 1, late), 0, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_GE(state->ramp_end_time_ns(), state->ramp_start_time_ns());
   EXPECT_NEAR(At(*state, std::numeric_limits<int64_t>::max())[0], 0.1, 1e-12);
@@ -367,14 +408,20 @@ TEST(DriverCoreLimits, ARampNearTheEndOfTimeNeitherOverflowsNorRunsForever) {
 
 TEST_F(DriverCoreTest, ACommandAnsweringTheLastSampleNumberLeavesTheDriverResponsive) {
   // 2^64 − 1: the driver once looped forever on it, holding its lock.
-  ASSERT_TRUE(core_.OnCommand(Command("A", 0, {0.1, 0.1, 0.1}, 1), 0, 0));
-  auto state = core_.OnCommand(Command("A", 0, {0.2, 0.2, 0.2}, std::numeric_limits<uint64_t>::max()), 100 * kUs, 0);
-  ASSERT_TRUE(state.has_value());
-  EXPECT_EQ(state->answers_sample(), std::numeric_limits<uint64_t>::max());
-  // States keep coming, and a bench that numbers from 1 again is followed.
-  state = core_.OnCommand(Command("A", 0, {0.3, 0.3, 0.3}, 2), 200 * kUs, 0);
+  ASSERT_TRUE(Send(core_, Command("A", 0, {0.1, 0.1, 0.1}, 1), 0, 0));
+  EXPECT_FALSE(core_.OnCommand(Command("B", 0, {0.2, 0.2, 0.2}, std::numeric_limits<uint64_t>::max()),
+                               100 * kUs, 0));
+  // States keep coming; nobody is made to look behind.
+  auto state = Send(core_, Command("A", 0, {0.3, 0.3, 0.3}, 2), 200 * kUs, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_EQ(state->answers_sample(), 2u);
+  EXPECT_EQ(core_.obeyed(), "A");
+  // Even when the bench itself publishes that number: bounded work, and the next run from 1.
+  core_.OnSample(std::numeric_limits<uint64_t>::max(), 300 * kUs, 0);
+  ASSERT_TRUE(core_.OnCommand(Command("A", 0, {0.3, 0.3, 0.3}, std::numeric_limits<uint64_t>::max(), 300 * kUs),
+                              300 * kUs, 0));
+  EXPECT_TRUE(core_.OnSample(1, 0, 0));
+  ASSERT_TRUE(Send(core_, Command("A", 0, {0.3, 0.3, 0.3}, 2), 400 * kUs, 0));
   EXPECT_TRUE(core_.Tick(5 * kMs, 0).has_value());
 }
 
@@ -385,7 +432,7 @@ TEST(DriverCoreLimits, ARampStopsAtTheFirstRangeEnd) {
   SimulatedWaveplates backend(ControlVector::Zero(3));
   DriverCore core(stages, DriverSettings{}, &backend);
   // Stage 0 reaches 0.5 after 1 ms at 100/s; stage 1 is at its end and pushes out: no rate.
-  auto state = core.OnCommand(RampCommand({0.4, 0.5, 0.0}, {100.0, 3.0, 7.0}, 1, 0), 0, 0);
+  auto state = Send(core, RampCommand({0.4, 0.5, 0.0}, {100.0, 3.0, 7.0}, 1, 0), 0, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_EQ(state->phi_rate_per_s(), std::vector<double>({100.0, 0.0, 7.0}));
   EXPECT_NEAR(state->ramp_end_time_ns(), 1 * kMs, 1);  // rounded down: never past the end
