@@ -51,7 +51,7 @@ class SvdGradientProjectionLaw final : public ControlLaw {
   double step_, nullspace_step_;
 };
 
-std::unique_ptr<ControlLaw> MakeSvdBaseline(const ControlLawConfig& c, int, bool) {
+std::unique_ptr<ControlLaw> MakeSvdBaseline(const ControllerConfig& c, const LawTiming&, int, bool) {
   return std::make_unique<SvdGradientProjectionLaw>(c.step, c.nullspace_step);
 }
 
@@ -91,11 +91,11 @@ std::string Axes(int stages) { return stages == 3 ? "131" : "3131"; }
 void BM_LawUpdate(benchmark::State& state, ControlMethod method) {
   const int stages = static_cast<int>(state.range(0));
   ProblemPool pool(Axes(stages));
-  ControlLawConfig config;
+  ControllerConfig config;
   config.method = method;
   std::unique_ptr<ControlLaw> law = method == ControlMethod::kGradientProjection && state.range(1)
-                                        ? MakeSvdBaseline(config, stages, true)
-                                        : MakeControlLaw(config, stages, true);
+                                        ? MakeSvdBaseline(config, LawTiming{}, stages, true)
+                                        : MakeControlLaw(config, LawTiming{}, stages, true);
   ControlVector delta;
   auto& problems = pool.problems();
   size_t i = 0;
@@ -111,9 +111,9 @@ void BM_FullControlStep(benchmark::State& state) {
   const int stages = static_cast<int>(state.range(0));
   const bool svd = state.range(1) != 0;
   ProblemPool pool(Axes(stages));
-  ControlLawConfig config;
-  std::unique_ptr<ControlLaw> law =
-      svd ? MakeSvdBaseline(config, stages, true) : MakeControlLaw(config, stages, true);
+  ControllerConfig config;
+  std::unique_ptr<ControlLaw> law = svd ? MakeSvdBaseline(config, LawTiming{}, stages, true)
+                                        : MakeControlLaw(config, LawTiming{}, stages, true);
   ControlVector delta;
   ChainPose pose;
   auto& problems = pool.problems();
@@ -154,11 +154,11 @@ void BM_ControlLoop(benchmark::State& state) {
   const int stages = static_cast<int>(state.range(0));
   const int64_t variant = state.range(1);
   const WaveplateChain chain = LoopChain(stages, variant == kRange);
-  ControlLawConfig config;
+  ControllerConfig config;
   config.curvature_correction = variant == kCorrect;
-  if (variant == kDamped) config.singularity_damping = 0.25;
-  config.range_aware = variant == kRange;
-  std::unique_ptr<ControlLaw> law = MakeControlLaw(config, stages, true);
+  if (variant == kDamped) config.singularity_damping = SingularityDampingConfig{0.25, 0.5};
+  if (variant == kRange) config.nullspace_criterion = NullspaceCriterion::kRange;
+  std::unique_ptr<ControlLaw> law = MakeControlLaw(config, LawTiming{}, stages, true);
   std::optional<DelayCompensator> compensator;
   if (variant == kPredict || variant == kCorrect) {
     compensator.emplace(1000.0, IntegratorLagSamples(config.step));
@@ -225,7 +225,9 @@ void BM_Simulator(benchmark::State& state) {
   ControlLawFactory factory = nullptr;
   if (variant == 1) factory = MakeSvdBaseline;
   if (variant == 2) {
-    factory = [](const ControlLawConfig& c, int n, bool point) { return MakeControlLaw(c, n, point); };
+    factory = [](const ControllerConfig& c, const LawTiming& timing, int n, bool point) {
+      return MakeControlLaw(c, timing, n, point);
+    };
   }
   ClosedLoopSimulator simulator(scenario, factory);
   int64_t samples = 0;

@@ -33,9 +33,8 @@ std::string ControllerCore::OnDevice(const msg::DeviceDescription& description) 
     }
     ValidateControllerConfig(settings_.controller, controls, target_config, settings_.simulation);
     auto chain = std::make_unique<WaveplateChain>(BuildChain(stages));
-    const ControlLawConfig law_config = BuildControlLawConfig(settings_.controller, settings_.simulation);
     law_for_point_ = target_config.kind == TargetConfig::Kind::kPoint;
-    auto law = MakeControlLaw(law_config, controls, law_for_point_);
+    auto law = MakeControlLaw(settings_.controller, BuildLawTiming(settings_.simulation), controls, law_for_point_);
     chain_ = std::move(chain);
     law_ = std::move(law);
     integrator_ = std::make_unique<ControlIntegrator>(*chain_, ControlVector::Zero(controls));
@@ -78,8 +77,8 @@ std::string ControllerCore::OnTarget(const msg::Target& message) {
     target_revision_ = message.revision();
     if (chain_ && law_for_point_ != target_->is_point()) {
       // A point law and a set law have different task sizes: rebuild the law.
-      const ControlLawConfig law_config = BuildControlLawConfig(settings_.controller, settings_.simulation);
-      law_ = MakeControlLaw(law_config, chain_->control_count(), target_->is_point());
+      law_ = MakeControlLaw(settings_.controller, BuildLawTiming(settings_.simulation),
+                            chain_->control_count(), target_->is_point());
       law_for_point_ = target_->is_point();
       problem_.need_jacobian = law_->needs_jacobian();
       activated_ = false;

@@ -13,18 +13,6 @@
 namespace dpc {
 namespace {
 
-/// Saturates a sample count to [0, INT_MAX] for the law's int settings.
-int ToIntSamples(int64_t samples) {
-  return static_cast<int>(std::clamp<int64_t>(samples, 0, INT_MAX));
-}
-
-/// round(x) as an int, saturated to [0, INT_MAX]; 0 for NaN.
-int RoundToIntSamples(double x) {
-  if (!(x > 0.0)) return 0;
-  if (x >= static_cast<double>(INT_MAX)) return INT_MAX;
-  return static_cast<int>(std::lround(x));
-}
-
 StageAngle BuildStageAngle(const StageAngleConfig& config) {
   if (!config.controlled) return StageAngle::Fixed(config.fixed_rad);
   return StageAngle::Controlled(BuildControlMap(config.map), config.range);
@@ -86,29 +74,8 @@ Target BuildTarget(const TargetConfig& config) {
   throw ScenarioError("target", "unknown target kind");
 }
 
-ControlLawConfig BuildControlLawConfig(const ControllerConfig& controller,
-                                       const SimulationConfig& simulation) {
-  ControlLawConfig config;
-  config.method = controller.method;
-  config.step = controller.step;
-  config.nullspace_step = controller.nullspace_step;
-  config.threshold = controller.threshold;
-  config.damping = controller.damping;
-  config.singular_value_tolerance = controller.singular_value_tolerance;
-  if (controller.singularity_damping) {
-    config.singularity_damping = controller.singularity_damping->max_damping;
-    config.singularity_threshold = controller.singularity_damping->threshold;
-  }
-  config.range_aware = controller.nullspace_criterion == NullspaceCriterion::kRange;
-  config.curvature_correction = controller.curvature_correction;
-  const DitherConfig& dither = controller.dither;
-  config.dither.amplitude = dither.amplitude;
-  config.dither.settle_samples = ToIntSamples(
-      dither.settle_samples != 0 ? dither.settle_samples : DelaySamples(simulation));
-  config.dither.reset_threshold = dither.reset_threshold;
-  config.dither.reset_samples =
-      std::max(1, RoundToIntSamples(dither.reset_duration_s * simulation.sample_rate_hz));
-  return config;
+LawTiming BuildLawTiming(const SimulationConfig& simulation) {
+  return LawTiming{simulation.sample_rate_hz, DelaySamples(simulation)};
 }
 
 ControlVector BuildInitialPhi(const ControllerConfig& controller, int control_count) {

@@ -1,6 +1,6 @@
 #pragma once
 // Builds the core objects a scenario describes: the stage maps and the waveplate chain, the
-// target, the control-law configuration and the initial control vector.
+// target, the loop timing a law needs and the initial control vector.
 //
 // The builders expect a scenario that passed ValidateScenario (scenario_validation.h). Given a
 // bad one they never crash: the core constructors throw std::invalid_argument, and the builders
@@ -31,14 +31,9 @@ WaveplateChain BuildChain(const std::vector<StageConfig>& stages);
 /// core rejects it.
 Target BuildTarget(const TargetConfig& config);
 
-/// The law's settings: method, step, nullspace_step, threshold, damping and
-/// singular_value_tolerance copied; dither.amplitude and reset_threshold copied,
-///   dither.settle_samples = controller.dither.settle_samples, or the loop delay in samples
-///                           (DelaySamples) when it is 0;
-///   dither.reset_samples  = max(1, round(reset_duration_s·sample_rate_hz)).
-/// Sample counts saturate at INT_MAX (validation keeps them ≤ 1e7).
-ControlLawConfig BuildControlLawConfig(const ControllerConfig& controller,
-                                       const SimulationConfig& simulation);
+/// The loop timing a law needs (MakeControlLaw): the sample rate and the loop delay in samples
+/// (DelaySamples).
+LawTiming BuildLawTiming(const SimulationConfig& simulation);
 
 /// controller.initial_phi as a ControlVector, or zeros(control_count) when it is empty. Throws
 /// ScenarioError at "controller.initial_phi" if its size is not control_count, or if

@@ -16,8 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "dpc/control/control_law_factory.h"
-#include "dpc/control/control_problem.h"
+#include "dpc/control/controller_config.h"
 #include "dpc/optics/stokes.h"
 #include "dpc/optics/waveplate_stage.h"
 
@@ -96,54 +95,6 @@ struct InputConfig {
   StokesVector initial_sop = StokesVector::UnitX();
   /// Applied in order on every sample. Empty: the input SOP holds still.
   std::vector<DisturbanceConfig> disturbances;
-};
-
-/// scenario.proto Dither (the dithering baseline's own settings).
-struct DitherConfig {
-  double amplitude = 0.02;
-  /// Samples to wait after each probe; 0 = the loop delay in samples.
-  int64_t settle_samples = 0;
-  double reset_threshold = 1.0;
-  double reset_duration_s = 1e-6;
-};
-
-/// scenario.proto SingularityDamping: damped J⁺ near singularities (gp, gpt):
-/// λ² = max_damping²·(1 − (σ_min/threshold)²) below σ_min = threshold, 0 above.
-struct SingularityDampingConfig {
-  double max_damping = 0.25;  ///< λ0
-  double threshold = 0.5;    ///< ε
-};
-
-/// scenario.proto NullspaceCriterion (gp, gpt).
-enum class NullspaceCriterion {
-  kMinimumNorm,  ///< H = ½‖φ‖² (the paper)
-  kRange,        ///< H = Σ(x²/2 + x⁸/8) in range units, with saturate and re-solve
-};
-
-/// scenario.proto Prediction: delay compensation (delay_compensator.h). Model loop only.
-struct PredictionConfig {
-  double window_samples = 1000;          ///< the predictor's memory, samples
-  std::optional<double> horizon_samples; ///< unset: the loop delay in samples
-  std::optional<double> lead_samples;    ///< unset: (1 − step)/step, the integrator's lag
-};
-
-/// scenario.proto Controller.
-struct ControllerConfig {
-  ControlMethod method = ControlMethod::kGradientProjection;
-  double step = 0.1;
-  double nullspace_step = 0.1;
-  double threshold = 1.0;
-  double damping = 1e-3;
-  double singular_value_tolerance = 1e-12;
-  LoopMode loop = LoopMode::kModel;
-  double activation_s = 2e-3;
-  /// φ before activation, one per control; empty = all zero.
-  std::vector<double> initial_phi;
-  DitherConfig dither;
-  std::optional<SingularityDampingConfig> singularity_damping;  ///< unset: off
-  NullspaceCriterion nullspace_criterion = NullspaceCriterion::kMinimumNorm;
-  std::optional<PredictionConfig> prediction;                   ///< unset: off
-  bool curvature_correction = false;  ///< gp, gpt: one correction step for the curvature
 };
 
 /// scenario.proto Simulation.

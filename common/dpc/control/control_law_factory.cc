@@ -2,7 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
+#include <climits>
+#include <cmath>
 #include <stdexcept>
 #include <utility>
 
@@ -43,8 +46,23 @@ std::optional<ControlMethod> ParseMethod(std::string_view name) {
 
 std::string_view MethodNameList() { return "inverse|transpose|damped|pinv|rls|gp|gpt|extended|dither"; }
 
-std::unique_ptr<ControlLaw> MakeControlLaw(const ControlLawConfig& config, int control_count,
-                                           bool point_target) {
+DitherSettings BuildDitherSettings(const DitherConfig& dither, const LawTiming& timing) {
+  const auto saturate = [](double samples) {
+    if (!(samples > 0.0)) return 0;
+    if (samples >= static_cast<double>(INT_MAX)) return INT_MAX;
+    return static_cast<int>(std::lround(samples));
+  };
+  DitherSettings settings;
+  settings.amplitude = dither.amplitude;
+  settings.settle_samples = static_cast<int>(std::clamp<int64_t>(
+      dither.settle_samples != 0 ? dither.settle_samples : timing.delay_samples, 0, INT_MAX));
+  settings.reset_threshold = dither.reset_threshold;
+  settings.reset_samples = std::max(1, saturate(dither.reset_duration_s * timing.sample_rate_hz));
+  return settings;
+}
+
+std::unique_ptr<ControlLaw> MakeControlLaw(const ControllerConfig& config, const LawTiming& timing,
+                                           int control_count, bool point_target) {
   const auto require_square = [&](std::string_view method) {
     const int task_rows = point_target ? 3 : 1;
     if (control_count != task_rows) {
@@ -74,16 +92,18 @@ std::unique_ptr<ControlLaw> MakeControlLaw(const ControlLawConfig& config, int c
         options.threshold = config.threshold;
       }
       options.singular_value_tolerance = config.singular_value_tolerance;
-      options.max_damping = config.singularity_damping;
-      options.damping_threshold = config.singularity_threshold;
-      options.range_aware = config.range_aware;
+      if (config.singularity_damping) {
+        options.max_damping = config.singularity_damping->max_damping;
+        options.damping_threshold = config.singularity_damping->threshold;
+      }
+      options.range_aware = config.nullspace_criterion == NullspaceCriterion::kRange;
       options.curvature_correction = config.curvature_correction;
       return std::make_unique<GradientProjectionLaw>(config.step, config.nullspace_step, options);
     }
     case ControlMethod::kExtendedJacobian:
       return std::make_unique<ExtendedJacobianLaw>(config.step, config.nullspace_step);
     case ControlMethod::kDither:
-      return std::make_unique<DitheringLaw>(config.step, config.dither);
+      return std::make_unique<DitheringLaw>(config.step, BuildDitherSettings(config.dither, timing));
   }
   throw std::invalid_argument("unknown control method");
 }

@@ -5,63 +5,42 @@
 //   inverse     InverseJacobianLaw                       step
 //   transpose   TransposeJacobianLaw                     step
 //   damped      DampedJacobianLaw                        step, damping
-//   pinv        PseudoInverseLaw                         step
+//   pinv        PseudoInverseLaw                         step, singular_value_tolerance
 //   rls         RegularizedLeastSquaresLaw               step, damping
-//   gp          GradientProjectionLaw                    step, nullspace_step, singularity_*,
-//                                                        range_aware
+//   gp          GradientProjectionLaw                    step, nullspace_step,
+//                                                        singular_value_tolerance,
+//                                                        singularity_damping, nullspace_criterion,
+//                                                        curvature_correction
 //   gpt         GradientProjectionLaw with threshold     the same and threshold
 //   extended    ExtendedJacobianLaw                      step, nullspace_step
-//   dither      DitheringLaw                             step, dither.*
+//   dither      DitheringLaw                             step, dither.* (with the loop timing)
 
+#include <functional>
 #include <memory>
-#include <optional>
-#include <string_view>
 
 #include "dpc/control/control_law.h"
+#include "dpc/control/controller_config.h"
 #include "dpc/control/dithering_law.h"
 
 namespace dpc {
 
-enum class ControlMethod {
-  kInverse,
-  kTranspose,
-  kDamped,
-  kPseudoInverse,
-  kRegularizedLeastSquares,
-  kGradientProjection,
-  kThresholdedGradientProjection,
-  kExtendedJacobian,
-  kDither,
-};
+/// The dithering law's sample counts from its config and the loop timing:
+///   settle_samples = dither.settle_samples, or the loop delay in samples when it is 0;
+///   reset_samples  = max(1, round(reset_duration_s · sample_rate_hz)).
+/// Sample counts saturate at INT_MAX (validation keeps them ≤ 1e7).
+DitherSettings BuildDitherSettings(const DitherConfig& dither, const LawTiming& timing);
 
-/// "inverse", "transpose", "damped", "pinv", "rls", "gp", "gpt", "extended", "dither".
-std::string_view MethodName(ControlMethod method);
-/// The inverse of MethodName; nullopt for an unknown name.
-std::optional<ControlMethod> ParseMethod(std::string_view name);
-/// "inverse|transpose|damped|pinv|rls|gp|gpt|extended|dither".
-std::string_view MethodNameList();
+/// Builds the configured law (config.method with the settings it uses, see the table above)
+/// for a task of `control_count` controls and a point or set target. Throws
+/// std::invalid_argument when the parameters are invalid or the method does not fit (inverse
+/// and damped need a square task: 3 controls with a point target, or 1 control with a set
+/// target).
+std::unique_ptr<ControlLaw> MakeControlLaw(const ControllerConfig& config, const LawTiming& timing,
+                                           int control_count, bool point_target);
 
-struct ControlLawConfig {
-  ControlMethod method = ControlMethod::kGradientProjection;
-  double step = 0.1;            ///< μ, task step (every law)
-  double nullspace_step = 0.1;  ///< μ_N (gp, gpt, extended)
-  double threshold = 1.0;       ///< |φ_i| above which gpt runs the null-space term
-  double damping = 1e-3;        ///< λ (damped, rls)
-  double singular_value_tolerance = 1e-12;  ///< relative, for J⁺
-  DitherSettings dither;        ///< dither only
-  /// gp, gpt: singularity-robust damping λ0 (0: off) and the σ_min below which it starts.
-  double singularity_damping = 0.0;
-  double singularity_threshold = 0.5;
-  /// gp, gpt: the range criterion with saturate and re-solve (gradient_projection_law.h).
-  bool range_aware = false;
-  /// gp, gpt: one curvature correction step per update.
-  bool curvature_correction = false;
-};
-
-/// Builds the configured law for `chain` and `target`. Throws std::invalid_argument when the
-/// parameters are invalid or the method does not fit (inverse and damped need a square task:
-/// 3 controls with a point target, or 1 control with a set target).
-std::unique_ptr<ControlLaw> MakeControlLaw(const ControlLawConfig& config, int control_count,
-                                           bool point_target);
+/// Builds the control law of a loop: MakeControlLaw by default; control engineers pass their
+/// own to run a law of theirs (any ControlLaw) in the simulator or the DDS controller.
+using ControlLawFactory = std::function<std::unique_ptr<ControlLaw>(
+    const ControllerConfig&, const LawTiming&, int control_count, bool point_target)>;
 
 }  // namespace dpc

@@ -21,12 +21,11 @@
 // path (S_in is known before the chain is evaluated).
 // For a set target n·S = c the task is 1-D: a = nᵀJ = (S_in × Mᵀn)ᵀΩ′ (1 × n), e = c − n·S_out.
 
+#include "dpc/control/controller_config.h"
 #include "dpc/control/target.h"
 #include "dpc/optics/waveplate_chain.h"
 
 namespace dpc {
-
-enum class LoopMode { kModel, kMeasured };
 
 /// A d × n task Jacobian, d ≤ 3 (2 for a point target in tangent coordinates, 1 for a set).
 /// Row-major: each row is contiguous, which is how the laws read it.

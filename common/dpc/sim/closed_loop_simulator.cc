@@ -23,14 +23,14 @@ ClosedLoopSimulator::ClosedLoopSimulator(const ScenarioConfig& scenario,
   ValidateScenario(scenario_);
   chain_ = std::make_unique<WaveplateChain>(BuildChain(scenario_.stages));
   target_ = std::make_unique<Target>(BuildTarget(scenario_.target));
-  law_config_ = BuildControlLawConfig(scenario_.controller, scenario_.simulation);
+  law_timing_ = BuildLawTiming(scenario_.simulation);
   initial_phi_ = BuildInitialPhi(scenario_.controller, chain_->control_count());
   delay_samples_ = DelaySamples(scenario_.simulation);
   total_samples_ = TotalSamples(scenario_.simulation);
   const double activation = scenario_.controller.activation_s * scenario_.simulation.sample_rate_hz;
   activation_sample_ = static_cast<int64_t>(std::ceil(activation - 1e-9 * std::max(1.0, activation)));
   // Fail here, not in Run, if the law does not fit the device.
-  law_factory_(law_config_, chain_->control_count(), target_->is_point());
+  law_factory_(scenario_.controller, law_timing_, chain_->control_count(), target_->is_point());
   fast_path_ = PlanFastPath(scenario_, *chain_, custom_law_);
 }
 
@@ -90,7 +90,7 @@ SimulationResult ClosedLoopSimulator::RunGeneral(SimulationObserver* observer,
   SimulationRun run(scenario_, target, chain.control_count(), total_samples_, observer,
                     decimation);
   std::unique_ptr<ControlLaw> law =
-      law_factory_(law_config_, chain.control_count(), target.is_point());
+      law_factory_(scenario_.controller, law_timing_, chain.control_count(), target.is_point());
   ControlIntegrator integrator(chain, initial_phi_);
   ChainPose initial_pose;
   chain.ComputePose(integrator.phi(), &initial_pose);

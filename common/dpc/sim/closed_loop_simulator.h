@@ -78,12 +78,6 @@ struct SimulationResult {
   ControlVector final_phi;
 };
 
-/// Builds the control law of a run: the default is MakeControlLaw; control engineers pass their
-/// own to simulate a law of theirs (any ControlLaw) on the same scenarios.
-using ControlLawFactory =
-    std::function<std::unique_ptr<ControlLaw>(const ControlLawConfig&, int control_count,
-                                              bool point_target)>;
-
 class ClosedLoopSimulator {
  public:
   /// OnProgress comes about this often (at the end of the block that crosses each multiple).
@@ -133,7 +127,7 @@ class ClosedLoopSimulator {
   bool custom_law_;
   std::unique_ptr<WaveplateChain> chain_;
   std::unique_ptr<Target> target_;
-  ControlLawConfig law_config_;
+  LawTiming law_timing_;
   ControlLawFactory law_factory_;
   ControlVector initial_phi_;
   int64_t delay_samples_ = 1;

@@ -155,51 +155,10 @@ TEST_F(ScenarioBuildersTest, BadTargetThrowsLocatedError) {
   }
 }
 
-TEST_F(ScenarioBuildersTest, ControlLawConfigCopiesTheController) {
-  ControllerConfig& c = scenario_.controller;
-  c.method = ControlMethod::kThresholdedGradientProjection;
-  c.step = 0.3;
-  c.nullspace_step = 0.05;
-  c.threshold = 0.8;
-  c.damping = 2e-3;
-  c.singular_value_tolerance = 1e-9;
-  c.dither.amplitude = 0.03;
-  c.dither.reset_threshold = 0.9;
-  const ControlLawConfig config = BuildControlLawConfig(c, scenario_.simulation);
-  EXPECT_EQ(config.method, ControlMethod::kThresholdedGradientProjection);
-  EXPECT_EQ(config.step, 0.3);
-  EXPECT_EQ(config.nullspace_step, 0.05);
-  EXPECT_EQ(config.threshold, 0.8);
-  EXPECT_EQ(config.damping, 2e-3);
-  EXPECT_EQ(config.singular_value_tolerance, 1e-9);
-  EXPECT_EQ(config.dither.amplitude, 0.03);
-  EXPECT_EQ(config.dither.reset_threshold, 0.9);
-}
-
-TEST_F(ScenarioBuildersTest, DitherSettleDefaultsToTheLoopDelay) {
-  ASSERT_EQ(scenario_.controller.dither.settle_samples, 0);
-  EXPECT_EQ(BuildControlLawConfig(scenario_.controller, scenario_.simulation)
-                .dither.settle_samples,
-            50);
-  scenario_.controller.dither.settle_samples = 7;
-  EXPECT_EQ(BuildControlLawConfig(scenario_.controller, scenario_.simulation)
-                .dither.settle_samples,
-            7);
-}
-
-TEST_F(ScenarioBuildersTest, DitherResetSamplesAreRoundedAndAtLeastOne) {
-  scenario_.controller.dither.reset_duration_s = 2e-6;
-  EXPECT_EQ(BuildControlLawConfig(scenario_.controller, scenario_.simulation)
-                .dither.reset_samples,
-            100);
-  scenario_.controller.dither.reset_duration_s = 0.0;
-  EXPECT_EQ(BuildControlLawConfig(scenario_.controller, scenario_.simulation)
-                .dither.reset_samples,
-            1);
-  scenario_.controller.dither.reset_duration_s = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_EQ(BuildControlLawConfig(scenario_.controller, scenario_.simulation)
-                .dither.reset_samples,
-            1);
+TEST_F(ScenarioBuildersTest, LawTimingIsTheSampleRateAndTheLoopDelayInSamples) {
+  const LawTiming timing = BuildLawTiming(scenario_.simulation);
+  EXPECT_EQ(timing.sample_rate_hz, 50e6);
+  EXPECT_EQ(timing.delay_samples, 50);
 }
 
 TEST_F(ScenarioBuildersTest, EveryMethodOfAValidScenarioBuildsALaw) {
@@ -211,9 +170,9 @@ TEST_F(ScenarioBuildersTest, EveryMethodOfAValidScenarioBuildsALaw) {
     SCOPED_TRACE(std::string(MethodName(method)));
     scenario_.controller.method = method;
     ASSERT_NO_THROW(ValidateScenario(scenario_));
-    const ControlLawConfig config =
-        BuildControlLawConfig(scenario_.controller, scenario_.simulation);
-    EXPECT_NE(MakeControlLaw(config, ScenarioControlCount(scenario_.stages), true), nullptr);
+    EXPECT_NE(MakeControlLaw(scenario_.controller, BuildLawTiming(scenario_.simulation),
+                             ScenarioControlCount(scenario_.stages), true),
+              nullptr);
   }
 }
 

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <climits>
+#include <limits>
+
 namespace dpc {
 namespace {
 
@@ -18,35 +21,60 @@ TEST(ControlLawFactoryTest, MethodNamesRoundTrip) {
 
 TEST(ControlLawFactoryTest, BuildsEveryMethodThatFits) {
   for (const char* name : {"transpose", "pinv", "rls", "gp", "gpt", "extended", "dither"}) {
-    ControlLawConfig config;
+    ControllerConfig config;
     config.method = *ParseMethod(name);
-    const auto law = MakeControlLaw(config, 4, true);
+    const auto law = MakeControlLaw(config, LawTiming{}, 4, true);
     ASSERT_NE(law, nullptr);
     EXPECT_EQ(law->name(), name);
   }
-  ControlLawConfig inverse;
+  ControllerConfig inverse;
   inverse.method = ControlMethod::kInverse;
-  EXPECT_EQ(MakeControlLaw(inverse, 3, true)->name(), "inverse");
-  EXPECT_EQ(MakeControlLaw(inverse, 1, false)->name(), "inverse");
+  EXPECT_EQ(MakeControlLaw(inverse, LawTiming{}, 3, true)->name(), "inverse");
+  EXPECT_EQ(MakeControlLaw(inverse, LawTiming{}, 1, false)->name(), "inverse");
 }
 
 TEST(ControlLawFactoryTest, SquareMethodsNeedASquareTask) {
   for (ControlMethod method : {ControlMethod::kInverse, ControlMethod::kDamped}) {
-    ControlLawConfig config;
+    ControllerConfig config;
     config.method = method;
-    EXPECT_THROW(MakeControlLaw(config, 4, true), std::invalid_argument);
-    EXPECT_THROW(MakeControlLaw(config, 3, false), std::invalid_argument);
+    EXPECT_THROW(MakeControlLaw(config, LawTiming{}, 4, true), std::invalid_argument);
+    EXPECT_THROW(MakeControlLaw(config, LawTiming{}, 3, false), std::invalid_argument);
   }
 }
 
 TEST(ControlLawFactoryTest, PassesParametersThrough) {
-  ControlLawConfig config;
+  ControllerConfig config;
   config.method = ControlMethod::kRegularizedLeastSquares;
   config.damping = 0.0;
-  EXPECT_THROW(MakeControlLaw(config, 4, true), std::invalid_argument);
+  EXPECT_THROW(MakeControlLaw(config, LawTiming{}, 4, true), std::invalid_argument);
   config.method = ControlMethod::kGradientProjection;
   config.step = -1.0;
-  EXPECT_THROW(MakeControlLaw(config, 4, true), std::invalid_argument);
+  EXPECT_THROW(MakeControlLaw(config, LawTiming{}, 4, true), std::invalid_argument);
+}
+
+TEST(ControlLawFactoryTest, DitherSettleDefaultsToTheLoopDelay) {
+  DitherConfig dither;
+  ASSERT_EQ(dither.settle_samples, 0);
+  EXPECT_EQ(BuildDitherSettings(dither, LawTiming{50e6, 50}).settle_samples, 50);
+  dither.settle_samples = 7;
+  EXPECT_EQ(BuildDitherSettings(dither, LawTiming{50e6, 50}).settle_samples, 7);
+}
+
+TEST(ControlLawFactoryTest, DitherResetSamplesAreRoundedAndAtLeastOne) {
+  DitherConfig dither;
+  dither.amplitude = 0.03;
+  dither.reset_threshold = 0.9;
+  dither.reset_duration_s = 2e-6;
+  const DitherSettings settings = BuildDitherSettings(dither, LawTiming{50e6, 50});
+  EXPECT_EQ(settings.reset_samples, 100);
+  EXPECT_EQ(settings.amplitude, 0.03);
+  EXPECT_EQ(settings.reset_threshold, 0.9);
+  dither.reset_duration_s = 0.0;
+  EXPECT_EQ(BuildDitherSettings(dither, LawTiming{50e6, 50}).reset_samples, 1);
+  dither.reset_duration_s = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(BuildDitherSettings(dither, LawTiming{50e6, 50}).reset_samples, 1);
+  dither.reset_duration_s = 1e300;
+  EXPECT_EQ(BuildDitherSettings(dither, LawTiming{50e6, 50}).reset_samples, INT_MAX);
 }
 
 }  // namespace

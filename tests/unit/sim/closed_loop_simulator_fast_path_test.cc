@@ -22,8 +22,8 @@ class Recorder : public SimulationObserver {
 // The general loop on the same scenario: a user-supplied law factory (here the built-in one)
 // keeps the simulator off the fast path.
 ClosedLoopSimulator General(const ScenarioConfig& s) {
-  return ClosedLoopSimulator(s, [](const ControlLawConfig& c, int n, bool point) {
-    return MakeControlLaw(c, n, point);
+  return ClosedLoopSimulator(s, [](const ControllerConfig& c, const LawTiming& timing, int n, bool point) {
+    return MakeControlLaw(c, timing, n, point);
   });
 }
 

@@ -222,7 +222,7 @@ TEST_F(ClosedLoopSimulatorTest, InvalidScenarioIsRejectedWithTheField) {
 
 TEST_F(ClosedLoopSimulatorTest, AcceptsAUserSuppliedLaw) {
   int built = 0;
-  ClosedLoopSimulator simulator(Paper("131", 1.5e-3), [&](const ControlLawConfig& c, int, bool) {
+  ClosedLoopSimulator simulator(Paper("131", 1.5e-3), [&](const ControllerConfig& c, const LawTiming&, int, bool) {
     ++built;
     return std::make_unique<PseudoInverseLaw>(c.step);
   });

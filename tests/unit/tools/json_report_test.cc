@@ -218,9 +218,9 @@ TEST_F(JsonReportTest, TextNamesTheGeneralLoopAndANeverLockingRun) {
   scenario_.controller.loop = LoopMode::kMeasured;
   scenario_.controller.step = 0.02;
   scenario_.simulation.lock_threshold_deg = 1e-9;
-  ClosedLoopSimulator simulator(scenario_, [](const ControlLawConfig& config, int controls,
+  ClosedLoopSimulator simulator(scenario_, [](const ControllerConfig& config, const LawTiming& timing, int controls,
                                                     bool point) {
-    return MakeControlLaw(config, controls, point);  // a user factory: always the general loop
+    return MakeControlLaw(config, timing, controls, point);  // a user factory: always the general loop
   });
   ASSERT_FALSE(simulator.uses_fast_path());
   const std::string text = RunReportText(simulator, simulator.Run());
