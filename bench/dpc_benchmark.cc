@@ -17,8 +17,8 @@
 #include "dpc/config/scenario_config.h"
 #include "dpc/control/control_law_factory.h"
 #include "dpc/control/control_problem.h"
-#include "dpc/control/delay_compensator.h"
 #include "dpc/control/gradient_projection_law.h"
+#include "dpc/control/polarization_controller.h"
 #include "dpc/sim/closed_loop_simulator.h"
 
 namespace dpc {
@@ -148,8 +148,9 @@ WaveplateChain LoopChain(int stages, bool ranges) {
   return WaveplateChain(std::move(list));
 }
 
-// The controller's dependent chain as the simulator runs it: each command's pose is derived
-// from the previous one (incremental sines/cosines), then kinematics, task, law, integration.
+// The controller's dependent chain as the simulator runs it: PolarizationController::Update
+// (kinematics, task, law, integration) on the pose of the current command, then the new
+// command's pose derived from it (incremental sines/cosines).
 void BM_ControlLoop(benchmark::State& state) {
   const int stages = static_cast<int>(state.range(0));
   const int64_t variant = state.range(1);
@@ -158,35 +159,23 @@ void BM_ControlLoop(benchmark::State& state) {
   config.curvature_correction = variant == kCorrect;
   if (variant == kDamped) config.singularity_damping = SingularityDampingConfig{0.25, 0.5};
   if (variant == kRange) config.nullspace_criterion = NullspaceCriterion::kRange;
-  std::unique_ptr<ControlLaw> law = MakeControlLaw(config, LawTiming{}, stages, true);
-  std::optional<DelayCompensator> compensator;
-  if (variant == kPredict || variant == kCorrect) {
-    compensator.emplace(1000.0, IntegratorLagSamples(config.step));
-  }
-  ControlProblem problem;
-  problem.chain = &chain;
-  problem.target = &kPaperTarget;
-  problem.need_jacobian = law->needs_jacobian();
+  if (variant == kPredict || variant == kCorrect) config.prediction = PredictionConfig{};  // window 1000
+  PolarizationController controller(chain, kPaperTarget, config, LawTiming{50e6, 50},
+                                    ControlVector::Constant(stages, 0.3));
   ChainPose poses[2];
-  ControlVector phi = ControlVector::Constant(stages, 0.3);
-  chain.ComputePose(phi, &poses[0]);
+  chain.ComputePose(controller.phi(), &poses[0]);
   // A slowly rotating input keeps the loop tracking (the steps stay small, as in the scenario).
   const Matrix3 turn = RotationAboutAxis(Vector3::UnitZ(), 2e-3);
-  StokesVector s_in = StokesVector(0.3, -0.5, 0.81).normalized();
-  ControlVector delta;
+  ControlInput input;
+  input.s_in = StokesVector(0.3, -0.5, 0.81).normalized();
   int current = 0;
   for (auto _ : state) {
-    s_in = turn * s_in;
-    problem.pose = &poses[current];
-    problem.s_in = compensator ? compensator->Predict(s_in, 50.0) : s_in;
-    UpdateControlProblem(&problem);
-    if (compensator) compensator->AddLead(&problem);
-    law->ComputeUpdate(problem, &delta);
-    phi += delta;
-    chain.ComputePoseFrom(poses[current], phi, &poses[1 - current]);
+    input.s_in = turn * input.s_in;
+    controller.Update(input, poses[current]);
+    chain.ComputePoseFrom(poses[current], controller.phi(), &poses[1 - current]);
     current = 1 - current;
   }
-  benchmark::DoNotOptimize(phi.data());
+  benchmark::DoNotOptimize(controller.phi().data());
 }
 
 void BM_Kinematics(benchmark::State& state) {

@@ -13,7 +13,6 @@
 namespace dpc::services {
 namespace {
 constexpr double kRadToDeg = 180.0 / M_PI;
-constexpr int64_t kRateMinSamples = 16;  ///< samples the predictor needs before a rate is sent
 }
 
 ControllerCore::ControllerCore(ControllerSettings settings) : settings_(std::move(settings)) {
@@ -33,34 +32,20 @@ std::string ControllerCore::OnDevice(const msg::DeviceDescription& description) 
     }
     ValidateControllerConfig(settings_.controller, controls, target_config, settings_.simulation);
     auto chain = std::make_unique<WaveplateChain>(BuildChain(stages));
-    law_for_point_ = target_config.kind == TargetConfig::Kind::kPoint;
-    auto law = MakeControlLaw(settings_.controller, BuildLawTiming(settings_.simulation), controls, law_for_point_);
+    controller_.reset();
     chain_ = std::move(chain);
-    law_ = std::move(law);
-    integrator_ = std::make_unique<ControlIntegrator>(*chain_, ControlVector::Zero(controls));
     applied_phi_ = ControlVector::Zero(controls);
     applied_motion_.phi = ControlVector::Zero(controls);
     applied_motion_.rate_per_s = ControlVector::Zero(controls);
     applied_motion_.moving = false;
-    rate_ = ControlVector::Zero(controls);
-    step_ = ControlVector::Zero(controls);
     rate_time_ns_ = 0;
     ramp_ = false;
     device_max_ramp_s_ = description.max_ramp_s() > 0.0 && std::isfinite(description.max_ramp_s())
                              ? description.max_ramp_s()
                              : 0.0;
     have_state_ = false;
-    activated_ = false;
-    problem_.chain = chain_.get();
-    problem_.loop_mode = settings_.controller.loop;
-    problem_.need_jacobian = law_->needs_jacobian();
-    compensator_.reset();
-    if (const auto& prediction = settings_.controller.prediction) {
-      compensator_.emplace(prediction->window_samples,
-                           prediction->lead_samples.value_or(IntegratorLagSamples(settings_.controller.step)),
-                           1.0 / settings_.simulation.sample_rate_hz);
-    }
     latency_estimate_s_ = -1.0;
+    if (target_) BuildController();
     condition_ = target_ ? "waiting for the driver's state" : "waiting for the target";
     return {};
   } catch (const std::exception& e) {
@@ -73,17 +58,11 @@ std::string ControllerCore::OnTarget(const msg::Target& message) {
   if (message.revision() <= target_revision_ && target_) return {};  // already have it
   try {
     const TargetConfig config = bus::TargetFromMessage(message);
-    target_ = std::make_unique<Target>(BuildTarget(config));
+    auto target = std::make_unique<Target>(BuildTarget(config));
+    if (controller_) controller_->SetTarget(*target);  // throws if the law does not fit
+    target_ = std::move(target);
     target_revision_ = message.revision();
-    if (chain_ && law_for_point_ != target_->is_point()) {
-      // A point law and a set law have different task sizes: rebuild the law.
-      law_ = MakeControlLaw(settings_.controller, BuildLawTiming(settings_.simulation),
-                            chain_->control_count(), target_->is_point());
-      law_for_point_ = target_->is_point();
-      problem_.need_jacobian = law_->needs_jacobian();
-      activated_ = false;
-    }
-    problem_.target = target_.get();
+    if (chain_ && !controller_) BuildController();
     if (!chain_) condition_ = "waiting for the device description";
     else if (!have_state_) condition_ = "waiting for the driver's state";
     return {};
@@ -93,9 +72,14 @@ std::string ControllerCore::OnTarget(const msg::Target& message) {
   }
 }
 
+void ControllerCore::BuildController() {
+  controller_ = std::make_unique<PolarizationController>(*chain_, *target_, settings_.controller,
+                                                         BuildLawTiming(settings_.simulation),
+                                                         applied_phi_);
+}
+
 void ControllerCore::Resync(const ControlVector& phi) {
-  integrator_->Reset(phi);
-  activated_ = false;
+  if (controller_) controller_->Reset(phi);
 }
 
 void ControllerCore::OnState(const msg::WaveplateState& state) {
@@ -156,46 +140,6 @@ double ControllerCore::PredictionHorizonS(const msg::StokesSample& sample) {
   return latency_estimate_s_ >= 0.0 ? std::round(latency_estimate_s_ * 1e6) * 1e-6 : period_s;
 }
 
-void ControllerCore::SolveRate(const ControlProblem& problem, const Vector3& omega, ControlVector* rate) {
-  // The input moves by ω × S_in (rad/s, input frame); φ̇ must cancel what that does to the
-  // task: T φ̇ = the rate of the task error it causes (−Eᵀ(ω × S_in) for a point target).
-  TaskVector velocity;
-  TaskErrorChangeOfInput(problem, omega.cross(problem.s_in), &velocity);
-  const SingularityDampingConfig damping =
-      settings_.controller.singularity_damping.value_or(SingularityDampingConfig{});
-  rate_solver_.ComputeDamped(problem.task_jacobian, damping.max_damping, damping.threshold);
-  rate_solver_.Solve(velocity, rate);
-}
-
-void ControllerCore::ComputeRate(double horizon_s) {
-  const InputPredictor& predictor = compensator_->predictor();
-  if (predictor.samples() < kRateMinSamples) {
-    rate_.setZero();
-    return;
-  }
-  const Vector3 omega = predictor.RotationPerSample() / predictor.nominal_sample_period_s();
-  // The rate where the update left the task (φ before the step, the measured input)...
-  SolveRate(problem_, omega, &rate_);
-  if (horizon_s > 0.0) {
-    // ...then again halfway to where the command will act (φ moved by that rate, the input
-    // predicted there): the ramp is a chord of the curved φ trajectory, and the midpoint's
-    // slope makes it meet the trajectory at the horizon to second order.
-    const double half_s = 0.5 * horizon_s;
-    step_ = integrator_->phi() + rate_ * half_s;
-    chain_->ComputePose(step_, &rate_pose_);
-    rate_problem_.chain = chain_.get();
-    rate_problem_.target = target_.get();
-    rate_problem_.pose = &rate_pose_;
-    rate_problem_.loop_mode = LoopMode::kModel;
-    rate_problem_.need_jacobian = false;
-    rate_problem_.s_in = predictor.PredictSeconds(half_s);
-    rate_problem_.s_out_measured = rate_problem_.s_in;
-    UpdateControlProblem(&rate_problem_);
-    SolveRate(rate_problem_, omega, &rate_);
-  }
-  if (!rate_.allFinite()) rate_.setZero();
-}
-
 void ControllerCore::RejectSample(std::string reason) {
   ++rejected_samples_;
   last_rejection_ = std::move(reason);
@@ -222,7 +166,7 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
   if (last_sample_ns_ != 0 &&
       now_ns - last_sample_ns_ > static_cast<int64_t>(settings_.freeze_after_s * 1e9)) {
     Resync(applied_phi_);  // samples resume after a gap: re-join from what is applied
-    if (compensator_) compensator_->Reset();  // the input's history is stale
+    controller_->ForgetInput();  // the input's history is stale
   }
   last_sample_ = sample.sequence_number();
   last_sample_ns_ = now_ns;
@@ -230,7 +174,7 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
   const int64_t t_ns = sample.sample_time_ns();
   last_sample_time_ns_ = t_ns;
   // Ramp mode needs a driver that ramps; otherwise a predicting controller aims at a point.
-  const bool ramp = compensator_ && !lockstep_ && device_max_ramp_s_ > 0.0 &&
+  const bool ramp = predicting() && !lockstep_ && device_max_ramp_s_ > 0.0 &&
                     settings_.prediction_mode == PredictionMode::kRamp;
   if (applied_motion_.moving) {
     applied_motion_.At(t_ns, &applied_phi_);
@@ -238,36 +182,22 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
   }
   if (obeyed_ && ramp && ramp_ && rate_time_ns_ != 0) {
     // The waveplates moved along the latest command's ramp since its sample: so does φ.
-    const double dt_s = std::clamp(static_cast<double>(t_ns - rate_time_ns_) * 1e-9, 0.0, device_max_ramp_s_);
-    step_ = rate_ * dt_s;
-    integrator_->Apply(ControlStatus::kOk, step_);
+    controller_->AdvanceAlongRate(
+        std::clamp(static_cast<double>(t_ns - rate_time_ns_) * 1e-9, 0.0, device_max_ramp_s_));
   }
 
   const auto start = std::chrono::steady_clock::now();
-  if (!activated_) {
-    law_->Activate(integrator_->phi());
-    activated_ = true;
-  }
-  chain_->ComputePose(integrator_->phi(), &pose_);
-  problem_.pose = &pose_;
-  if (compensator_) {
+  ControlInput input;
+  input.s_in = bus::ToStokes(sample.s_in());
+  input.s_out = bus::ToStokes(sample.s_out());
+  if (predicting()) {
     sample_times_ns_[sample.sequence_number() % kSampleTimeRing] = {sample.sequence_number(), t_ns};
     horizon_s_ = PredictionHorizonS(sample);
-    if (compensator_->predictor().samples() == 0) time_origin_ns_ = t_ns;
-    // Rate commands take the measured input (horizon 0: the latest sample itself) and use the
-    // horizon only for the rate's midpoint; otherwise the law aims at the prediction.
-    problem_.s_in = compensator_->PredictAt(bus::ToStokes(sample.s_in()),
-                                            static_cast<double>(t_ns - time_origin_ns_) * 1e-9,
-                                            ramp ? 0.0 : horizon_s_);
-  } else {
-    problem_.s_in = bus::ToStokes(sample.s_in());
+    input.time_ns = t_ns;
+    input.horizon_s = horizon_s_;
+    input.rate_command = ramp;
   }
-  problem_.s_out_measured = bus::ToStokes(sample.s_out());
-  UpdateControlProblem(&problem_);
-  if (compensator_ && !ramp) compensator_->AddLead(&problem_);
-  const ControlStatus status = law_->ComputeUpdate(problem_, &delta_phi_);
-  const ControlIntegrator::Outcome outcome = integrator_->Apply(status, delta_phi_);
-  if (ramp) ComputeRate(horizon_s_);
+  const ControlUpdate update = controller_->Update(input);
   ramp_ = ramp;
   const double compute_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -275,17 +205,17 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
   ++interval_updates_;
   interval_compute_s_ += compute_s;
   interval_compute_max_s_ = std::max(interval_compute_max_s_, compute_s);
-  const ControlDiagnostics& diagnostics = law_->diagnostics();
+  const ControlDiagnostics& diagnostics = controller_->diagnostics();
   if (diagnostics.nullspace_active) ++interval_nullspace_;
   sigma_max_ = diagnostics.singular_values.max();
   sigma_min_ = diagnostics.singular_values.min();
-  error_deg_ = target_->DistanceRad(problem_.s_out_measured) * kRadToDeg;
+  error_deg_ = target_->DistanceRad(input.s_out) * kRadToDeg;
   condition_ = obeyed_ ? "tracking" : "standby (following the applied φ)";
-  if (outcome == ControlIntegrator::Outcome::kRejected) {
+  if (update.outcome == ControlIntegrator::Outcome::kRejected) {
     // Never applied; the command repeats the current φ, so the driver (and a lockstep bench)
     // still gets its answer, as `dpc sim` carries the latest command on.
     ++failed_updates_;
-    last_rejection_ = fmt::format("update failed: {}", ControlStatusName(status));
+    last_rejection_ = fmt::format("update failed: {}", ControlStatusName(update.status));
   }
 
   // Built in place: after the first command the message's φ keeps its capacity, so answering
@@ -299,10 +229,11 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
   command.answers_sample(sample.sequence_number());
   command.sample_time_ns(sample.sample_time_ns());
   command.sample_publish_time_ns(sample.publish_time_ns());
-  const ControlVector& phi = integrator_->phi();
+  const ControlVector& phi = controller_->phi();
   command.phi().assign(phi.data(), phi.data() + phi.size());
   if (ramp) {
-    command.phi_rate_per_s().assign(rate_.data(), rate_.data() + rate_.size());
+    const ControlVector& rate = controller_->rate_per_s();
+    command.phi_rate_per_s().assign(rate.data(), rate.data() + rate.size());
     rate_time_ns_ = t_ns;
   } else {
     command.phi_rate_per_s().clear();
@@ -322,13 +253,13 @@ msg::ControllerStatus ControllerCore::TakeStatus(int64_t now_ns, int64_t wall_ns
     condition_ = "waiting for samples";
   }
   std::string condition = condition_;
-  if (compensator_ && configured()) {
+  if (configured() && predicting()) {
+    const double rate_rad_per_s = controller_->compensator()->predictor().RateRadPerS();
     if (ramp_) {
-      condition += fmt::format(" (ramping with the input at {:.0f} rad/s)",
-                               compensator_->predictor().RateRadPerS());
+      condition += fmt::format(" (ramping with the input at {:.0f} rad/s)", rate_rad_per_s);
     } else {
       condition += fmt::format(" (predicting {:.3f} ms ahead, input at {:.0f} rad/s)", horizon_s_ * 1e3,
-                               compensator_->predictor().RateRadPerS());
+                               rate_rad_per_s);
     }
   }
   msg::ControllerStatus status;

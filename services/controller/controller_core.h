@@ -1,6 +1,9 @@
 #pragma once
-// The Jacobian controller's logic, without DDS. The wiring (main.cc) feeds it what arrives and
-// publishes what it returns, under one lock.
+// The controller service's logic, without DDS. The wiring (main.cc) feeds it what arrives and
+// publishes what it returns, under one lock. The control step itself is the
+// PolarizationController's (control/polarization_controller.h), the same as the simulator's;
+// this class adds what the bench needs around it: configuration from the bus, following the
+// driver's state, the measured loop latency, commands and status.
 //
 // Configuration comes from the bus: the device description (TRANSIENT_LOCAL, from the driver)
 // builds the chain, the target topic the target; the law and its settings come from the
@@ -26,21 +29,13 @@
 //
 // That is PredictionMode::kLatency. The default in real time, kRamp, does better: a single
 // horizon cannot fit a latency that jitters by a sample or two, so the command carries the
-// motion instead of a point. From the fitted input rotation ω (rad/s, input frame), the rate
-// that keeps the output still is the solution of the task's differential kinematics
-// (paper eq. 4 with the input moving: Ṡ_out = Jφ̇ + (Mω) × S_out):
-//
-//   point target:  T φ̇ = −Eᵀ(ω × S_in)          (T, E: the reduced task, control_problem.h)
-//   set target:    nᵀJ φ̇ = −(Mᵀn)·(ω × S_in)
-//
-// solved with the damped task pseudo-inverse (minimum norm: no null-space motion). The command
-// is φ at the sample's time plus φ̇; the driver moves the waveplates along φ + φ̇·(t − t_sample)
-// in bench time (WaveplateState's ramp), so wherever the command lands in time it is right for
-// that moment. The integrator follows the same motion: before each update it advances by
-// φ̇·(t_k − t_(k−1)) of its latest command, then the law corrects what the motion missed from
-// the measurement at t_k (no lead, no horizon). A standby controller follows the applied
-// motion evaluated at each sample's time. Lockstep samples get no rate (the simulated bench's
-// delay line applies points), so lockstep still equals `dpc sim`.
+// motion instead of a point: φ at the sample's time plus φ̇, the rate that keeps the output still
+// while the input turns at the fitted rate (PolarizationController, rate commands); the driver
+// moves the waveplates along φ + φ̇·(t − t_sample) in bench time, so wherever the command lands
+// in time it is right for that moment. Before each update the command advances along its
+// latest ramp (the waveplates followed it); a standby controller follows the applied motion
+// evaluated at each sample's time. Lockstep samples get no rate (the simulated bench's delay
+// line applies points), so lockstep still equals `dpc sim`.
 //
 // When samples stop, nothing is integrated (the controller only acts on samples): the
 // integrator is frozen, the status says "frozen", and after a gap longer than freeze_after_s the
@@ -52,14 +47,9 @@
 #include <optional>
 #include <string>
 
-#include "dpc/config/scenario_config.h"
-#include "dpc/control/control_integrator.h"
-#include "dpc/control/control_law.h"
-#include "dpc/control/control_law_factory.h"
-#include "dpc/control/control_problem.h"
 #include "dpc/bus/message_conversion.h"
-#include "dpc/control/delay_compensator.h"
-#include "dpc/control/task_pseudo_inverse.h"
+#include "dpc/config/scenario_config.h"
+#include "dpc/control/polarization_controller.h"
 #include "dpc/control/target.h"
 #include "dpc/msg/bench.h"
 #include "dpc/optics/waveplate_chain.h"
@@ -101,46 +91,37 @@ class ControllerCore {
   /// The status since the previous call (resets the per-interval figures).
   msg::ControllerStatus TakeStatus(int64_t now_ns, int64_t wall_ns, uint64_t missed_deadlines);
 
-  bool configured() const { return chain_ != nullptr && target_ != nullptr && have_state_; }
+  bool configured() const { return controller_ != nullptr && have_state_; }
   bool obeyed() const { return obeyed_; }
-  const ControlVector& phi() const { return integrator_->phi(); }
+  const ControlVector& phi() const { return controller_->phi(); }
   /// Malformed samples and driver states (counted together, reported in the status).
   uint64_t rejected_samples() const { return rejected_samples_; }
   const std::string& last_rejection() const { return last_rejection_; }
   const std::string& condition() const { return condition_; }
   /// Delay compensation: on, and the horizon (seconds) the latest update predicted across.
-  bool predicting() const { return compensator_.has_value(); }
+  bool predicting() const { return controller_ != nullptr && controller_->compensator() != nullptr; }
   double prediction_horizon_s() const { return horizon_s_; }
-  /// Ramp mode: the rate of the latest command (empty: none).
-  const ControlVector& phi_rate_per_s() const { return rate_; }
+  /// Ramp mode: the rate of the latest command (zero: none).
+  const ControlVector& phi_rate_per_s() const { return controller_->rate_per_s(); }
 
  private:
+  /// Builds the controller once the device and the target are known, from the applied φ.
+  void BuildController();
   void Resync(const ControlVector& phi);
   void RejectSample(std::string reason);
   /// Real-time. The horizon for the sample at t_ns: the measured loop latency (see the file
   /// comment), or the configured one.
   double PredictionHorizonS(const msg::StokesSample& sample);
-  /// Ramp mode: rate_ = the φ̇ that keeps the output still while the input turns at the fitted
-  /// rate (see the file comment), evaluated halfway across `horizon_s` (the measured latency).
-  void ComputeRate(double horizon_s);
-  /// The φ̇ for `problem` (its task, basis and input) and input rotation ω (rad/s).
-  void SolveRate(const ControlProblem& problem, const Vector3& omega, ControlVector* rate);
 
   ControllerSettings settings_;
   std::unique_ptr<WaveplateChain> chain_;
   std::unique_ptr<Target> target_;
-  std::unique_ptr<ControlLaw> law_;
-  std::unique_ptr<ControlIntegrator> integrator_;
-  ChainPose pose_;
-  ControlProblem problem_;
-  ControlVector delta_phi_;
+  std::unique_ptr<PolarizationController> controller_;
   std::string law_name_;
 
   bool have_state_ = false;
   bool obeyed_ = false;
-  bool activated_ = false;
   bool lockstep_ = false;            ///< the latest sample came from a lockstep bench
-  bool law_for_point_ = true;        ///< the law was built for a point target
   ControlVector applied_phi_;         ///< the applied motion at the latest sample's time
   bus::AppliedTrajectory applied_motion_;  ///< from the latest driver state
   uint64_t last_answered_sample_ = 0;  ///< of this controller's latest command
@@ -150,21 +131,14 @@ class ControllerCore {
   uint64_t sequence_ = 0;
   uint64_t target_revision_ = 0;
 
-  // Delay compensation (unset: off).
-  std::optional<DelayCompensator> compensator_;
+  // Delay compensation.
   bool ramp_ = false;                     ///< the latest update was in ramp mode
-  ControlVector rate_;                    ///< the latest command's φ̇ (ramp mode)
-  ControlVector step_;                    ///< scratch: rate_ × the time since the last command
-  int64_t rate_time_ns_ = 0;              ///< its sample time
+  int64_t rate_time_ns_ = 0;              ///< the latest rate command's sample time
   double device_max_ramp_s_ = 0.0;        ///< the driver's (device description); 0: no ramps
   int64_t last_sample_time_ns_ = 0;       ///< the latest sample's bench time
-  TaskPseudoInverse rate_solver_;
-  ChainPose rate_pose_;                   ///< the chain halfway across the horizon
-  ControlProblem rate_problem_;
   double horizon_s_ = 0.0;                ///< the latest horizon used
   double latency_estimate_s_ = -1.0;      ///< smoothed t_j − t_a; < 0: none yet
   uint64_t state_answers_sample_ = 0;     ///< of the latest state obeying this controller
-  int64_t time_origin_ns_ = 0;            ///< the predictor's t = 0 (keeps double seconds exact)
   static constexpr size_t kSampleTimeRing = 4096;  ///< recent samples' times, by sequence number
   std::array<std::pair<uint64_t, int64_t>, kSampleTimeRing> sample_times_ns_{};
   // Status.

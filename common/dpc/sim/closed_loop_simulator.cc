@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "dpc/config/scenario_builders.h"
-#include "dpc/control/delay_compensator.h"
+#include "dpc/control/polarization_controller.h"
 #include "dpc/sim/delay_line.h"
 #include "dpc/sim/simulation_run.h"
 #include "dpc/config/scenario_validation.h"
@@ -89,28 +89,12 @@ SimulationResult ClosedLoopSimulator::RunGeneral(SimulationObserver* observer,
   const double dt_s = 1.0 / scenario_.simulation.sample_rate_hz;
   SimulationRun run(scenario_, target, chain.control_count(), total_samples_, observer,
                     decimation);
-  std::unique_ptr<ControlLaw> law =
-      law_factory_(scenario_.controller, law_timing_, chain.control_count(), target.is_point());
-  ControlIntegrator integrator(chain, initial_phi_);
+  PolarizationController controller(chain, target, scenario_.controller, law_timing_, initial_phi_,
+                                    law_factory_);
   ChainPose initial_pose;
-  chain.ComputePose(integrator.phi(), &initial_pose);
+  chain.ComputePose(controller.phi(), &initial_pose);
   DelayLine<ChainPose> line(delay_samples_, initial_pose);
-
-  ControlProblem problem;
-  problem.chain = &chain;
-  problem.target = &target;
-  problem.loop_mode = scenario_.controller.loop;
-  problem.need_jacobian = law->needs_jacobian();
-  ControlVector delta_phi;
-  std::optional<DelayCompensator> compensator;
-  double horizon_samples = 0.0;
-  if (const auto& prediction = scenario_.controller.prediction) {
-    compensator.emplace(prediction->window_samples,
-                        prediction->lead_samples.value_or(
-                            IntegratorLagSamples(scenario_.controller.step)));
-    horizon_samples =
-        prediction->horizon_samples.value_or(static_cast<double>(delay_samples_));
-  }
+  ControlInput input;  // the sample clock: one nominal period per update
 
   // Blocks of up to D samples: a command issued in a block acts D samples later, so never in
   // the same block. Each block first runs the input, the plant and the polarimeters for all its
@@ -148,23 +132,16 @@ SimulationResult ClosedLoopSimulator::RunGeneral(SimulationObserver* observer,
       const int64_t sample = k + i;
       bool issued = false;
       if (sample >= activation_sample_) {
-        if (sample == activation_sample_) law->Activate(integrator.phi());
-        problem.pose = &line.latest();
-        problem.s_in = compensator ? compensator->Predict(in_measured[static_cast<size_t>(i)],
-                                                          horizon_samples)
-                                   : in_measured[static_cast<size_t>(i)];
-        problem.s_out_measured = out_measured[static_cast<size_t>(i)];
-        UpdateControlProblem(&problem);
-        if (compensator) compensator->AddLead(&problem);
-        const ControlStatus status = law->ComputeUpdate(problem, &delta_phi);
-        const ControlIntegrator::Outcome outcome = integrator.Apply(status, delta_phi);
-        const ControlDiagnostics& diagnostics = law->diagnostics();
-        run.statistics.AddUpdate(diagnostics.nullspace_active, !IsUsable(status),
-                                 status == ControlStatus::kRankDeficient,
-                                 outcome == ControlIntegrator::Outcome::kClamped,
+        input.s_in = in_measured[static_cast<size_t>(i)];
+        input.s_out = out_measured[static_cast<size_t>(i)];
+        const ControlUpdate update = controller.Update(input, line.latest());
+        const ControlDiagnostics& diagnostics = controller.diagnostics();
+        run.statistics.AddUpdate(diagnostics.nullspace_active, !IsUsable(update.status),
+                                 update.status == ControlStatus::kRankDeficient,
+                                 update.outcome == ControlIntegrator::Outcome::kClamped,
                                  diagnostics.singular_values);
-        if (outcome != ControlIntegrator::Outcome::kRejected) {
-          chain.ComputePoseFrom(line.latest(), integrator.phi(), &line.issue(slot));
+        if (update.outcome != ControlIntegrator::Outcome::kRejected) {
+          chain.ComputePoseFrom(line.latest(), controller.phi(), &line.issue(slot));
           issued = true;
         }
       }
@@ -174,7 +151,7 @@ SimulationResult ClosedLoopSimulator::RunGeneral(SimulationObserver* observer,
     k += count;
     if (!run.EndBlock(k)) break;
   }
-  return run.Finish(k, law->diagnostics().resets, integrator.phi());
+  return run.Finish(k, controller.diagnostics().resets, controller.phi());
 }
 
 }  // namespace dpc
