@@ -52,7 +52,7 @@
 #include <nlohmann/json.hpp>
 
 #include "dpc/bus/bus_participant.h"
-#include "dpc/bus/wall_clock.h"
+#include "dpc/bench/clock.h"
 #include "support/child_process.h"
 #include "support/json_lines.h"
 
@@ -166,7 +166,7 @@ int RunRelay() {
     c->sequence_number(s.sequence_number());
     c->answers_sample(s.sequence_number());
     c->sample_publish_time_ns(s.publish_time_ns());
-    c->publish_time_ns(bus::WallClockNs());
+    c->publish_time_ns(WallClockNs());
   });
 }
 
@@ -178,7 +178,7 @@ int RunCommandEcho() {
   state.saturated({false, false, false});
   return RunEcho<msg::WaveplateCommand>("dpc-bench-command-echo", state,
                                         [](const msg::WaveplateCommand& c, msg::WaveplateState* r) {
-                                          r->command_receive_time_ns(bus::WallClockNs());
+                                          r->command_receive_time_ns(WallClockNs());
                                           r->bench_id(c.bench_id());
                                           r->answers_sample(c.answers_sample());
                                           r->sample_publish_time_ns(c.sample_publish_time_ns());
@@ -211,7 +211,7 @@ class RawReference {
     children_ = StartEchoes(self, domain, chain, "");
     writer_ = participant_.MakeWriter<msg::StokesSample>();
     reader_ = participant_.MakeReader<msg::WaveplateState>("", [this](const msg::WaveplateState& s, const auto&) {
-      const int64_t now = bus::WallClockNs();
+      const int64_t now = WallClockNs();
       std::lock_guard<std::mutex> lock(mutex_);
       if (s.answers_sample() > last_answer_) {
         last_answer_ = s.answers_sample();
@@ -248,15 +248,15 @@ class RawReference {
     sample.s_out({1, 0, 0});
     prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
     const int64_t period_ns = pace_hz > 0.0 ? static_cast<int64_t>(1e9 / pace_hz) : 0;
-    int64_t next_ns = bus::MonotonicNs();
+    int64_t next_ns = MonotonicNs();
     for (int i = 1; i <= count; ++i) {
       if (period_ns > 0) {
         next_ns += period_ns;
-        bus::SleepUntilMonotonicNs(next_ns);
+        SleepUntilMonotonicNs(next_ns);
       }
       const uint64_t sequence = ++sequence_;
       sample.sequence_number(sequence);
-      sample.publish_time_ns(bus::WallClockNs());
+      sample.publish_time_ns(WallClockNs());
       writer_->Write(sample);
       std::unique_lock<std::mutex> lock(mutex_);
       answered_.wait_for(lock, 100ms, [&] { return last_answer_ >= sequence; });
@@ -478,21 +478,21 @@ RawRateResult RawRate(const std::string& self, double rate_hz, double seconds, b
   const int64_t period_ns = static_cast<int64_t>(1e9 / rate_hz);
   const int64_t total = static_cast<int64_t>(rate_hz * seconds);
   RawRateResult result;
-  const int64_t start_ns = bus::MonotonicNs();
+  const int64_t start_ns = MonotonicNs();
   int64_t next_ns = start_ns;
   for (int64_t k = 1; k <= total; ++k) {
-    bus::SleepUntilMonotonicNs(next_ns);
-    const int64_t now_ns = bus::MonotonicNs();
+    SleepUntilMonotonicNs(next_ns);
+    const int64_t now_ns = MonotonicNs();
     if (now_ns - next_ns > period_ns) {
       result.late_periods += (now_ns - next_ns) / period_ns;
       next_ns = now_ns;
     }
     next_ns += period_ns;
     sample.sequence_number(static_cast<uint64_t>(k));
-    sample.publish_time_ns(bus::WallClockNs());
+    sample.publish_time_ns(WallClockNs());
     writer->Write(sample);
   }
-  const double wall_s = static_cast<double>(bus::MonotonicNs() - start_ns) * 1e-9;
+  const double wall_s = static_cast<double>(MonotonicNs() - start_ns) * 1e-9;
   std::this_thread::sleep_for(100ms);
   reader.reset();
   result.achieved_hz = static_cast<double>(total) / wall_s;
@@ -564,13 +564,13 @@ int RunRawOwner(int strength, double rate_hz) {
   sample.optical_power_known(true);
   sample.optical_power_w(strength);
   const int64_t period_ns = static_cast<int64_t>(1e9 / rate_hz);
-  int64_t next_ns = bus::MonotonicNs();
+  int64_t next_ns = MonotonicNs();
   const timespec poll{0, 0};
   for (uint64_t k = 1;; ++k) {
     next_ns += period_ns;
-    bus::SleepUntilMonotonicNs(next_ns);
+    SleepUntilMonotonicNs(next_ns);
     sample.sequence_number(k);
-    sample.publish_time_ns(bus::WallClockNs());
+    sample.publish_time_ns(WallClockNs());
     writer->write(&sample);
     if ((k & 63) == 0 && sigtimedwait(&set, nullptr, &poll) > 0) break;
   }
@@ -586,7 +586,7 @@ class OwnedReader : public fdds::DataReaderListener {
     while (reader->take_next_sample(&sample, &info) == ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data) continue;
       std::lock_guard<std::mutex> lock(mutex);
-      arrivals.emplace_back(bus::WallClockNs(), static_cast<int>(sample.optical_power_w()));
+      arrivals.emplace_back(WallClockNs(), static_cast<int>(sample.optical_power_w()));
     }
   }
   std::mutex mutex;

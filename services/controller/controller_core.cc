@@ -6,7 +6,6 @@
 
 #include <fmt/format.h>
 
-#include "dpc/bus/message_conversion.h"
 #include "dpc/config/scenario_builders.h"
 #include "dpc/config/scenario_validation.h"
 
@@ -21,9 +20,9 @@ ControllerCore::ControllerCore(ControllerSettings settings) : settings_(std::mov
 
 ControllerCore::~ControllerCore() = default;
 
-std::string ControllerCore::OnDevice(const msg::DeviceDescription& description) {
+std::string ControllerCore::OnDevice(const DeviceDescription& description) {
   try {
-    std::vector<StageConfig> stages = bus::StagesFromDescription(description);
+    const std::vector<StageConfig>& stages = description.stages;
     const int controls = ScenarioControlCount(stages);
     // The law must fit the device and the current target (inverse needs a square task).
     TargetConfig target_config;
@@ -40,9 +39,7 @@ std::string ControllerCore::OnDevice(const msg::DeviceDescription& description) 
     applied_motion_.moving = false;
     rate_time_ns_ = 0;
     ramp_ = false;
-    device_max_ramp_s_ = description.max_ramp_s() > 0.0 && std::isfinite(description.max_ramp_s())
-                             ? description.max_ramp_s()
-                             : 0.0;
+    device_max_ramp_s_ = description.max_ramp_s;
     have_state_ = false;
     latency_estimate_s_ = -1.0;
     if (target_) BuildController();
@@ -54,14 +51,21 @@ std::string ControllerCore::OnDevice(const msg::DeviceDescription& description) 
   }
 }
 
-std::string ControllerCore::OnTarget(const msg::Target& message) {
-  if (message.revision() <= target_revision_ && target_) return {};  // already have it
+void ControllerCore::OnUnusableDevice(const std::string& reason) {
+  condition_ = fmt::format("unusable device description: {}", reason);
+}
+
+void ControllerCore::OnUnusableTarget(const std::string& reason) {
+  condition_ = fmt::format("unusable target: {}", reason);
+}
+
+std::string ControllerCore::OnTarget(const BenchTarget& message) {
+  if (message.revision <= target_revision_ && target_) return {};  // already have it
   try {
-    const TargetConfig config = bus::TargetFromMessage(message);
-    auto target = std::make_unique<Target>(BuildTarget(config));
+    auto target = std::make_unique<Target>(BuildTarget(message.target));
     if (controller_) controller_->SetTarget(*target);  // throws if the law does not fit
     target_ = std::move(target);
-    target_revision_ = message.revision();
+    target_revision_ = message.revision;
     if (chain_ && !controller_) BuildController();
     if (!chain_) condition_ = "waiting for the device description";
     else if (!have_state_) condition_ = "waiting for the driver's state";
@@ -82,31 +86,21 @@ void ControllerCore::Resync(const ControlVector& phi) {
   if (controller_) controller_->Reset(phi);
 }
 
-void ControllerCore::OnState(const msg::WaveplateState& state) {
-  if (!chain_) return;
-  if (std::string reason = bus::CheckStateShape(state, chain_->control_count()); !reason.empty()) {
-    RejectSample("state: " + reason);
-    return;
-  }
-  bus::ReadTrajectory(state, &applied_motion_);
+void ControllerCore::OnState(const DriverState& state) {
+  if (!chain_ || state.control_count() != chain_->control_count()) return;
+  applied_motion_ = state.motion;
   applied_motion_.At(last_sample_time_ns_, &applied_phi_);
   const bool first = !have_state_;
   have_state_ = true;
-  obeyed_ = state.mode() == msg::DRIVER_ACTIVE &&
-            state.obeyed_controller_id().to_string() == settings_.controller_id;
+  obeyed_ = state.mode == DriverMode::kActive && state.obeyed_controller_id == settings_.controller_id;
   if (first) {
     Resync(applied_phi_);
     return;
   }
   if (obeyed_) {
-    state_answers_sample_ = state.answers_sample();
-    if (state.answers_sample() == last_answered_sample_) {
-      for (bool limited : state.saturated()) {
-        if (limited) {
-          Resync(applied_phi_);  // the driver clamped our latest command: no wind-up
-          break;
-        }
-      }
+    state_answers_sample_ = state.answers_sample;
+    if (state.answers_sample == last_answered_sample_ && state.any_saturated()) {
+      Resync(applied_phi_);  // the driver clamped our latest command: no wind-up
     }
     return;
   }
@@ -115,19 +109,19 @@ void ControllerCore::OnState(const msg::WaveplateState& state) {
   // our latest command (it answers an older sample) must not undo that command. In real time
   // such a race costs at most one step, and following every heartbeat matters more (a
   // controller whose commands have not reached the driver yet must not drift on its own).
-  const bool stale_heartbeat = state.mode() == msg::DRIVER_HOLDING && lockstep_ &&
-                               state.answers_sample() < last_answered_sample_;
+  const bool stale_heartbeat = state.mode == DriverMode::kHolding && lockstep_ &&
+                               state.answers_sample < last_answered_sample_;
   if (!stale_heartbeat) Resync(applied_phi_);
 }
 
-double ControllerCore::PredictionHorizonS(const msg::StokesSample& sample) {
+double ControllerCore::PredictionHorizonS(const BenchSample& sample) {
   const PredictionConfig& prediction = *settings_.controller.prediction;
   const double period_s = 1.0 / settings_.simulation.sample_rate_hz;
   if (prediction.horizon_samples) return *prediction.horizon_samples * period_s;
-  if (sample.lockstep()) return settings_.simulation.delay_s;  // the simulated bench's own delay
+  if (sample.lockstep) return settings_.simulation.delay_s;  // the simulated bench's own delay
   const auto& [sequence, time_ns] = sample_times_ns_[state_answers_sample_ % kSampleTimeRing];
   if (obeyed_ && state_answers_sample_ != 0 && sequence == state_answers_sample_) {
-    const double latency_s = static_cast<double>(sample.sample_time_ns() - time_ns) * 1e-9;
+    const double latency_s = static_cast<double>(sample.time_ns - time_ns) * 1e-9;
     if (latency_s >= 0.0 && latency_s < 0.5) {
       latency_estimate_s_ = latency_estimate_s_ < 0.0
                                 ? latency_s
@@ -140,26 +134,21 @@ double ControllerCore::PredictionHorizonS(const msg::StokesSample& sample) {
   return latency_estimate_s_ >= 0.0 ? std::round(latency_estimate_s_ * 1e6) * 1e-6 : period_s;
 }
 
-void ControllerCore::RejectSample(std::string reason) {
+void ControllerCore::RejectInput(std::string reason) {
   ++rejected_samples_;
   last_rejection_ = std::move(reason);
 }
 
-const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& sample,
-                                                              int64_t now_ns, int64_t wall_ns) {
-  if (std::string reason = bus::CheckStokesSample(sample); !reason.empty()) {
-    RejectSample(reason);
-    return nullptr;
-  }
+const ControllerCommand* ControllerCore::OnSample(const BenchSample& sample, int64_t now_ns,
+                                                 int64_t wall_ns) {
   if (!configured()) return nullptr;
-  if (sample.sequence_number() == last_sample_ && last_command_ &&
-      last_command_->answers_sample() == last_sample_) {
+  if (sample.sequence == last_sample_ && last_command_ && last_command_->answers_sample == last_sample_) {
     // The same sample again: a lockstep bench re-publishes when its answer was lost (the
     // periodic topics are best effort). Answer it again, without integrating twice.
-    last_command_->publish_time_ns(wall_ns);
+    last_command_->publish_time_ns = wall_ns;
     return &*last_command_;
   }
-  if (sample.sequence_number() <= last_sample_) {
+  if (sample.sequence <= last_sample_) {
     // Out of order or repeated (a restarted bench starts again at 1: accept after a gap).
     if (now_ns - last_sample_ns_ < static_cast<int64_t>(settings_.freeze_after_s * 1e9)) return nullptr;
   }
@@ -168,10 +157,10 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
     Resync(applied_phi_);  // samples resume after a gap: re-join from what is applied
     controller_->ForgetInput();  // the input's history is stale
   }
-  last_sample_ = sample.sequence_number();
+  last_sample_ = sample.sequence;
   last_sample_ns_ = now_ns;
-  lockstep_ = sample.lockstep();
-  const int64_t t_ns = sample.sample_time_ns();
+  lockstep_ = sample.lockstep;
+  const int64_t t_ns = sample.time_ns;
   last_sample_time_ns_ = t_ns;
   // Ramp mode needs a driver that ramps; otherwise a predicting controller aims at a point.
   const bool ramp = predicting() && !lockstep_ && device_max_ramp_s_ > 0.0 &&
@@ -188,10 +177,10 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
 
   const auto start = std::chrono::steady_clock::now();
   ControlInput input;
-  input.s_in = bus::ToStokes(sample.s_in());
-  input.s_out = bus::ToStokes(sample.s_out());
+  input.s_in = sample.s_in;
+  input.s_out = sample.s_out;
   if (predicting()) {
-    sample_times_ns_[sample.sequence_number() % kSampleTimeRing] = {sample.sequence_number(), t_ns};
+    sample_times_ns_[sample.sequence % kSampleTimeRing] = {sample.sequence, t_ns};
     horizon_s_ = PredictionHorizonS(sample);
     input.time_ns = t_ns;
     input.horizon_s = horizon_s_;
@@ -218,33 +207,32 @@ const msg::WaveplateCommand* ControllerCore::OnSample(const msg::StokesSample& s
     last_rejection_ = fmt::format("update failed: {}", ControlStatusName(update.status));
   }
 
-  // Built in place: after the first command the message's φ keeps its capacity, so answering
-  // a sample allocates nothing.
-  if (!last_command_) last_command_.emplace();
-  msg::WaveplateCommand& command = *last_command_;
-  command.bench_id(settings_.bench_id);
-  command.controller_id(settings_.controller_id);
-  command.priority(settings_.priority);
-  command.sequence_number(++sequence_);
-  command.answers_sample(sample.sequence_number());
-  command.sample_time_ns(sample.sample_time_ns());
-  command.sample_publish_time_ns(sample.publish_time_ns());
-  const ControlVector& phi = controller_->phi();
-  command.phi().assign(phi.data(), phi.data() + phi.size());
+  // Built in place: the command's vectors have fixed capacity, so answering a sample
+  // allocates nothing.
+  if (!last_command_) {
+    last_command_.emplace();
+    last_command_->controller_id = settings_.controller_id;
+    last_command_->priority = settings_.priority;
+  }
+  ControllerCommand& command = *last_command_;
+  command.sequence = ++sequence_;
+  command.answers_sample = sample.sequence;
+  command.sample_time_ns = sample.time_ns;
+  command.sample_publish_time_ns = sample.publish_time_ns;
+  command.phi = controller_->phi();
   if (ramp) {
-    const ControlVector& rate = controller_->rate_per_s();
-    command.phi_rate_per_s().assign(rate.data(), rate.data() + rate.size());
+    command.rate_per_s = controller_->rate_per_s();
     rate_time_ns_ = t_ns;
   } else {
-    command.phi_rate_per_s().clear();
+    command.rate_per_s.resize(0);
   }
-  command.publish_time_ns(wall_ns);
-  last_answered_sample_ = sample.sequence_number();
+  command.publish_time_ns = wall_ns;
+  last_answered_sample_ = sample.sequence;
   return &command;
 }
 
-msg::ControllerStatus ControllerCore::TakeStatus(int64_t now_ns, int64_t wall_ns,
-                                                 uint64_t missed_deadlines) {
+ControllerStatusReport ControllerCore::TakeStatus(int64_t now_ns, int64_t wall_ns,
+                                                  uint64_t missed_deadlines) {
   if (configured() && last_sample_ns_ != 0 &&
       now_ns - last_sample_ns_ > static_cast<int64_t>(settings_.freeze_after_s * 1e9)) {
     condition_ = fmt::format("frozen: no sample for {:.0f} ms",
@@ -262,27 +250,26 @@ msg::ControllerStatus ControllerCore::TakeStatus(int64_t now_ns, int64_t wall_ns
                                rate_rad_per_s);
     }
   }
-  msg::ControllerStatus status;
-  status.bench_id(settings_.bench_id);
-  status.controller_id(settings_.controller_id);
-  status.priority(settings_.priority);
-  status.law(law_name_);
-  status.obeyed(obeyed_);
-  status.condition(condition.substr(0, 127));
-  status.answers_sample(last_answered_sample_);
-  status.error_deg(error_deg_);
-  status.sigma_max(sigma_max_);
-  status.sigma_min(sigma_min_);
-  status.nullspace_active_fraction(
-      interval_updates_ ? static_cast<double>(interval_nullspace_) / static_cast<double>(interval_updates_) : 0.0);
-  status.compute_time_mean_s(interval_updates_ ? interval_compute_s_ / static_cast<double>(interval_updates_) : 0.0);
-  status.compute_time_max_s(interval_compute_max_s_);
-  status.updates(updates_);
-  status.failed_updates(failed_updates_);
-  status.rejected_samples(rejected_samples_);
-  status.missed_deadlines(missed_deadlines);
-  status.last_rejection(last_rejection_.substr(0, 255));
-  status.publish_time_ns(wall_ns);
+  ControllerStatusReport status;
+  status.controller_id = settings_.controller_id;
+  status.priority = settings_.priority;
+  status.law = law_name_;
+  status.obeyed = obeyed_;
+  status.condition = condition;
+  status.answers_sample = last_answered_sample_;
+  status.error_deg = error_deg_;
+  status.sigma_max = sigma_max_;
+  status.sigma_min = sigma_min_;
+  status.nullspace_active_fraction =
+      interval_updates_ ? static_cast<double>(interval_nullspace_) / static_cast<double>(interval_updates_) : 0.0;
+  status.compute_time_mean_s = interval_updates_ ? interval_compute_s_ / static_cast<double>(interval_updates_) : 0.0;
+  status.compute_time_max_s = interval_compute_max_s_;
+  status.updates = updates_;
+  status.failed_updates = failed_updates_;
+  status.rejected_samples = rejected_samples_;
+  status.missed_deadlines = missed_deadlines;
+  status.last_rejection = last_rejection_;
+  status.publish_time_ns = wall_ns;
   interval_updates_ = interval_nullspace_ = 0;
   interval_compute_s_ = interval_compute_max_s_ = 0.0;
   return status;

@@ -47,11 +47,10 @@
 #include <optional>
 #include <string>
 
-#include "dpc/bus/message_conversion.h"
+#include "dpc/bench/bench_messages.h"
 #include "dpc/config/scenario_config.h"
 #include "dpc/control/polarization_controller.h"
 #include "dpc/control/target.h"
-#include "dpc/msg/bench.h"
 #include "dpc/optics/waveplate_chain.h"
 
 namespace dpc::services {
@@ -63,7 +62,6 @@ enum class PredictionMode {
 };
 
 struct ControllerSettings {
-  std::string bench_id = "bench1";
   std::string controller_id = "controller";
   int32_t priority = 0;
   ControllerConfig controller;      ///< law, step, loop mode (scenario's controller section)
@@ -77,19 +75,30 @@ class ControllerCore {
   explicit ControllerCore(ControllerSettings settings);
   ~ControllerCore();
 
-  /// Returns an error message if the description is unusable (the controller keeps its previous
-  /// device, if any).
-  std::string OnDevice(const msg::DeviceDescription& description);
-  std::string OnTarget(const msg::Target& target);
-  void OnState(const msg::WaveplateState& state);
+  /// Returns an error message if the device does not fit the controller's law (the controller
+  /// keeps its previous device, if any).
+  std::string OnDevice(const DeviceDescription& description);
+  /// Returns an error message if the law does not fit the target (the previous one is kept).
+  std::string OnTarget(const BenchTarget& target);
+  /// A description or target the edge could not read (bus::ReadDevice / ReadTarget): the
+  /// status says why the controller waits.
+  void OnUnusableDevice(const std::string& reason);
+  void OnUnusableTarget(const std::string& reason);
+  /// A driver's state (read for control_count() controls).
+  void OnState(const DriverState& state);
   /// A polarimeter sample at wall time `wall_ns`, monotonic `now_ns`: the command answering it,
-  /// or none (not configured, malformed, stale sample). A failed update answers with φ unchanged.
-  /// The command is the core's own (valid until the next OnSample call), or nullptr.
-  const msg::WaveplateCommand* OnSample(const msg::StokesSample& sample, int64_t now_ns,
-                                        int64_t wall_ns);
+  /// or none (not configured, stale sample). A failed update answers with φ unchanged. The
+  /// command is the core's own (valid until the next OnSample call), or nullptr.
+  const ControllerCommand* OnSample(const BenchSample& sample, int64_t now_ns, int64_t wall_ns);
+  /// A sample or state the edge refused (`reason`: bus::ReadSample / ReadState): counted and
+  /// reported in the status.
+  void RejectInput(std::string reason);
 
   /// The status since the previous call (resets the per-interval figures).
-  msg::ControllerStatus TakeStatus(int64_t now_ns, int64_t wall_ns, uint64_t missed_deadlines);
+  ControllerStatusReport TakeStatus(int64_t now_ns, int64_t wall_ns, uint64_t missed_deadlines);
+
+  /// The device's controls (0 before its description).
+  int control_count() const { return chain_ ? chain_->control_count() : 0; }
 
   bool configured() const { return controller_ != nullptr && have_state_; }
   bool obeyed() const { return obeyed_; }
@@ -108,10 +117,9 @@ class ControllerCore {
   /// Builds the controller once the device and the target are known, from the applied φ.
   void BuildController();
   void Resync(const ControlVector& phi);
-  void RejectSample(std::string reason);
   /// Real-time. The horizon for the sample at t_ns: the measured loop latency (see the file
   /// comment), or the configured one.
-  double PredictionHorizonS(const msg::StokesSample& sample);
+  double PredictionHorizonS(const BenchSample& sample);
 
   ControllerSettings settings_;
   std::unique_ptr<WaveplateChain> chain_;
@@ -123,9 +131,9 @@ class ControllerCore {
   bool obeyed_ = false;
   bool lockstep_ = false;            ///< the latest sample came from a lockstep bench
   ControlVector applied_phi_;         ///< the applied motion at the latest sample's time
-  bus::AppliedTrajectory applied_motion_;  ///< from the latest driver state
+  WaveplateMotion applied_motion_;    ///< from the latest driver state
   uint64_t last_answered_sample_ = 0;  ///< of this controller's latest command
-  std::optional<msg::WaveplateCommand> last_command_;
+  std::optional<ControllerCommand> last_command_;
   uint64_t last_sample_ = 0;
   int64_t last_sample_ns_ = 0;
   uint64_t sequence_ = 0;

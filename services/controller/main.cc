@@ -10,7 +10,8 @@
 
 #include "controller_core.h"
 #include "dpc/bus/bus_participant.h"
-#include "dpc/bus/wall_clock.h"
+#include "dpc/bus/message_conversion.h"
+#include "dpc/bench/clock.h"
 #include "dpc/config/scenario_error.h"
 #include "service_runtime.h"
 
@@ -50,7 +51,6 @@ int Run(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
-  settings.bench_id = common.bench_id;
   settings.prediction_mode = predict_mode == "latency" ? PredictionMode::kLatency : PredictionMode::kRamp;
   SetUpLogging("controller " + settings.controller_id, common);
   try {
@@ -69,38 +69,58 @@ int Run(int argc, char** argv) {
     auto command_writer = participant.MakeWriter<msg::WaveplateCommand>();
     auto status_writer = participant.MakeWriter<msg::ControllerStatus>();
     auto devices = participant.MakeReader<msg::DeviceDescription>(
-        common.bench_id, [&](const msg::DeviceDescription& description, const auto&) {
+        common.bench_id, [&](const msg::DeviceDescription& message, const auto&) {
+          DeviceDescription description;
+          const std::string unreadable = bus::ReadDevice(message, &description);
           std::lock_guard<std::mutex> lock(mutex);
-          if (std::string error = core.OnDevice(description); !error.empty()) {
+          if (!unreadable.empty()) {
+            core.OnUnusableDevice(unreadable);
+            spdlog::error("unusable device description: {}", unreadable);
+          } else if (std::string error = core.OnDevice(description); !error.empty()) {
             spdlog::error("{}", error);
           } else {
-            spdlog::info("device: {} stages from driver {}", description.stages().size(),
-                         description.driver_id().to_string());
+            spdlog::info("device: {} stages from driver {}", description.stages.size(), description.driver_id);
           }
         });
     auto targets = participant.MakeReader<msg::Target>(
-        common.bench_id, [&](const msg::Target& target, const auto&) {
+        common.bench_id, [&](const msg::Target& message, const auto&) {
+          BenchTarget target;
+          const std::string unreadable = bus::ReadTarget(message, &target);
           std::lock_guard<std::mutex> lock(mutex);
-          if (std::string error = core.OnTarget(target); !error.empty()) {
+          if (!unreadable.empty()) {
+            core.OnUnusableTarget(unreadable);
+            spdlog::error("unusable target: {}", unreadable);
+          } else if (std::string error = core.OnTarget(target); !error.empty()) {
             spdlog::error("{}", error);
           } else {
-            spdlog::info("target revision {}", target.revision());
+            spdlog::info("target revision {}", target.revision);
           }
         });
     RejectionLog rejections("rejected sample or state");
+    DriverState state;  // read into in place, under the lock
     auto states = participant.MakeReader<msg::WaveplateState>(
-        common.bench_id, [&](const msg::WaveplateState& state, const auto&) {
+        common.bench_id, [&](const msg::WaveplateState& message, const auto&) {
           std::lock_guard<std::mutex> lock(mutex);
-          core.OnState(state);
+          if (core.control_count() == 0) return;  // no device yet
+          if (std::string reason = bus::ReadState(message, core.control_count(), &state); !reason.empty()) {
+            core.RejectInput("state: " + reason);
+          } else {
+            core.OnState(state);
+          }
           rejections.Update(core.rejected_samples(), core.last_rejection());
         });
+    BenchSample sample;
+    msg::WaveplateCommand command_message;  // written in place: no allocation per command
     std::unique_ptr<bus::Reader<msg::StokesSample>> samples;
     samples = participant.MakeReader<msg::StokesSample>(
-        common.bench_id, [&](const msg::StokesSample& sample, const auto&) {
-          const int64_t wall_ns = bus::WallClockNs();
+        common.bench_id, [&](const msg::StokesSample& message, const auto&) {
+          const int64_t wall_ns = WallClockNs();
           std::lock_guard<std::mutex> lock(mutex);
-          if (auto command = core.OnSample(sample, bus::MonotonicNs(), wall_ns)) {
-            command_writer->Write(*command);
+          if (std::string reason = bus::ReadSample(message, &sample); !reason.empty()) {
+            core.RejectInput(reason);
+          } else if (const ControllerCommand* command = core.OnSample(sample, MonotonicNs(), wall_ns)) {
+            bus::WriteCommand(*command, common.bench_id, &command_message);
+            command_writer->Write(command_message);
           }
           rejections.Update(core.rejected_samples(), core.last_rejection());
         });
@@ -111,12 +131,12 @@ int Run(int argc, char** argv) {
     const auto period = std::chrono::milliseconds(static_cast<int64_t>(status_period_s * 1000));
     while (!signals.Wait(period)) {
       std::lock_guard<std::mutex> lock(mutex);
-      const msg::ControllerStatus status = core.TakeStatus(
-          bus::MonotonicNs(), bus::WallClockNs(), samples->counters().deadline_misses.load());
-      status_writer->Write(status);
-      if (status.condition() != last_condition) {
-        last_condition = status.condition();
-        spdlog::info("{}{}", last_condition, status.obeyed() ? " (obeyed)" : "");
+      const ControllerStatusReport status = core.TakeStatus(
+          MonotonicNs(), WallClockNs(), samples->counters().deadline_misses.load());
+      status_writer->Write(bus::StatusMessage(status, common.bench_id));
+      if (status.condition != last_condition) {
+        last_condition = status.condition;
+        spdlog::info("{}{}", last_condition, status.obeyed ? " (obeyed)" : "");
       }
     }
     samples.reset();

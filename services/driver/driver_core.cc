@@ -7,7 +7,6 @@
 
 #include <fmt/format.h>
 
-#include "dpc/bus/message_conversion.h"
 #include "dpc/config/scenario_builders.h"
 
 namespace dpc::services {
@@ -37,8 +36,7 @@ DriverCore::DriverCore(std::vector<StageConfig> stages, DriverSettings settings,
     : chain_(BuildChain(stages)),
       settings_(std::move(settings)),
       backend_(backend),
-      applied_(backend->Applied()),
-      saturated_(static_cast<size_t>(chain_.control_count()), false) {
+      applied_(backend->Applied()) {
   if (applied_.rate_per_s.size() != applied_.phi.size()) {
     applied_.rate_per_s = ControlVector::Zero(applied_.phi.size());
   }
@@ -151,17 +149,12 @@ void DriverCore::Hold(const std::string& reason) {
 
 void DriverCore::StopMotion() {
   if (!applied_.moving) return;
-  bus::AppliedTrajectory still = applied_;
-  applied_.At(applied_.end_ns, &still.phi);
-  still.rate_per_s.setZero();
-  still.start_ns = applied_.end_ns;
-  still.moving = false;
-  if (backend_->Apply(still).empty()) applied_ = backend_->Applied();
+  if (backend_->Apply(applied_.Stopped()).empty()) applied_ = backend_->Applied();
 }
 
-void DriverCore::Answer(const msg::WaveplateCommand& command, int64_t wall_ns) {
+void DriverCore::Answer(uint64_t sample_number, int64_t wall_ns) {
   // The sample's times from the bench's own record, not from the command.
-  answers_sample_ = command.answers_sample();
+  answers_sample_ = sample_number;
   const std::optional<SampleTimeline::Sample> sample = timeline_.Find(answers_sample_);
   sample_time_ns_ = sample ? sample->time_ns : timeline_.TimeOfNs(answers_sample_);
   sample_publish_time_ns_ = sample ? sample->publish_time_ns : 0;
@@ -173,19 +166,24 @@ void DriverCore::Reject(const std::string& controller_id, const std::string& rea
   last_rejection_ = fmt::format("from {}: {}", controller_id.empty() ? "?" : controller_id, reason);
 }
 
-std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCommand& command,
-                                                         int64_t now_ns, int64_t wall_ns) {
-  const std::string id = command.controller_id().to_string();
-  if (std::string reason = bus::CheckCommandShape(command, chain_.control_count()); !reason.empty()) {
-    Reject(id, reason);
-    if (id != obeyed_) return std::nullopt;
-    // The obeyed controller's bad command: keep φ, but answer the sample (a lockstep bench
-    // waits for it) and say why nothing changed.
-    Answer(command, wall_ns);
-    std::fill(saturated_.begin(), saturated_.end(), false);
-    return Publishable(wall_ns);
+std::optional<DriverState> DriverCore::OnMalformedCommand(const std::string& controller_id,
+                                                          uint64_t answers_sample, const std::string& reason,
+                                                          int64_t wall_ns) {
+  Reject(controller_id, reason);
+  if (controller_id != obeyed_ || !timeline_.CheckSequence(answers_sample).empty()) {
+    return std::nullopt;
   }
-  if (std::string reason = timeline_.CheckAnswer(command.answers_sample(), command.sample_time_ns());
+  // The obeyed controller's bad command: keep φ, but answer the sample (a lockstep bench waits
+  // for it) and say why nothing changed.
+  Answer(answers_sample, wall_ns);
+  saturated_.fill(false);
+  return Publishable(wall_ns);
+}
+
+std::optional<DriverState> DriverCore::OnCommand(const ControllerCommand& command, int64_t now_ns,
+                                                 int64_t wall_ns) {
+  const std::string& id = command.controller_id;
+  if (std::string reason = timeline_.CheckAnswer(command.answers_sample, command.sample_time_ns);
       !reason.empty()) {
     // Not answered: the sample it names is not one the bench published.
     Reject(id, reason);
@@ -212,10 +210,10 @@ std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCom
                                   : (1.0 - kIntervalSmoothing) * record.mean_interval_ns +
                                         kIntervalSmoothing * interval;
   }
-  record.priority = command.priority();
+  record.priority = command.priority;
   record.last_command_ns = now_ns;
   ++record.commands;
-  NoteAnswer(&record, command.answers_sample(), now_ns);
+  NoteAnswer(&record, command.answers_sample, now_ns);
 
   if (id != obeyed_) {
     // The controller in charge: the obeyed one, or while holding after a general silence the
@@ -232,7 +230,7 @@ std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCom
       if (!obeyed_.empty()) return std::nullopt;
       // Holding for the suspended controller: answer the sample (a lockstep bench waits for
       // it), apply nothing.
-      Answer(command, wall_ns);
+      Answer(command.answers_sample, wall_ns);
       return Publishable(wall_ns);
     }
     std::string reason = fmt::format("obeying {} (priority {})", id, record.priority);
@@ -249,24 +247,24 @@ std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCom
   // applied command (never the command's timestamps), from where the current motion has the
   // waveplates at this command's time.
   const int n = chain_.control_count();
-  const int64_t start_ns = timeline_.TimeOfNs(command.answers_sample());
-  bus::AppliedTrajectory motion = applied_;
+  const int64_t start_ns = timeline_.TimeOfNs(command.answers_sample);
+  WaveplateMotion motion = applied_;
   applied_.At(start_ns, &motion.phi);
   const ControlVector base = motion.phi;
   bool limited = false;
   const double max_step =
       applied_any_ ? max_slew_per_s_ * static_cast<double>(std::max<int64_t>(0, now_ns - last_applied_ns_)) * 1e-9
                    : INFINITY;
-  const bool has_rate = !command.phi_rate_per_s().empty();
+  const bool has_rate = command.rate_per_s.size() != 0;
   const int64_t max_ramp_ns = DurationNs(settings_.max_ramp_s);
   int64_t end_ns = SaturatingAdd(start_ns, max_ramp_ns);
   bool moving = false;
   for (int i = 0; i < n; ++i) {
-    const double wanted = command.phi()[static_cast<size_t>(i)];
+    const double wanted = command.phi[i];
     const ControlRange& range = ranges_[static_cast<size_t>(i)];
     double value = range.Clamp(wanted);
     value = std::clamp(value, base[i] - max_step, base[i] + max_step);
-    const double wanted_rate = has_rate ? command.phi_rate_per_s()[static_cast<size_t>(i)] : 0.0;
+    const double wanted_rate = has_rate ? command.rate_per_s[i] : 0.0;
     double rate = std::clamp(wanted_rate, -max_slew_per_s_, max_slew_per_s_);
     if (rate != 0.0) {
       // The ramp stops when the first stage reaches its range end; one already there gets none.
@@ -297,17 +295,17 @@ std::optional<msg::WaveplateState> DriverCore::OnCommand(const msg::WaveplateCom
   last_applied_ns_ = now_ns;
   ++applied_count_;
   if (limited) ++limited_;
-  Answer(command, wall_ns);
+  Answer(command.answers_sample, wall_ns);
   return Publishable(wall_ns);
 }
 
-std::optional<msg::WaveplateState> DriverCore::Tick(int64_t now_ns, int64_t wall_ns) {
+std::optional<DriverState> DriverCore::Tick(int64_t now_ns, int64_t wall_ns) {
   if (!obeyed_.empty()) {
     const ControllerRecord& record = controllers_.at(obeyed_);
     const Liveness liveness = Judge(record, now_ns);
     if (liveness == Liveness::kAlive) return std::nullopt;
     const std::string silent = obeyed_;
-    std::fill(saturated_.begin(), saturated_.end(), false);
+    saturated_.fill(false);
     if (liveness == Liveness::kSilent) {
       const double silent_ms = static_cast<double>(now_ns - record.last_command_ns) * 1e-6;
       // Nobody answered anything newer: no samples, or the whole machine stalled. Not this
@@ -346,36 +344,29 @@ int64_t DriverCore::NextTickNs() const {
   return last_state_ns_ + static_cast<int64_t>(settings_.holding_state_period_s * 1e9);
 }
 
-msg::WaveplateState DriverCore::State(int64_t wall_ns) const {
-  msg::WaveplateState state;
-  state.bench_id(settings_.bench_id);
-  state.sequence_number(sequence_);
-  state.answers_sample(answers_sample_);
-  state.sample_time_ns(sample_time_ns_);
-  state.sample_publish_time_ns(sample_publish_time_ns_);
-  state.command_receive_time_ns(command_receive_time_ns_);
-  state.publish_time_ns(wall_ns);
-  state.phi_applied().assign(applied_.phi.data(), applied_.phi.data() + applied_.phi.size());
-  if (applied_.moving) {
-    state.phi_rate_per_s().assign(applied_.rate_per_s.data(),
-                                  applied_.rate_per_s.data() + applied_.rate_per_s.size());
-  }
-  state.ramp_start_time_ns(applied_.start_ns);
-  state.ramp_end_time_ns(applied_.moving ? applied_.end_ns : applied_.start_ns);
-  state.saturated().assign(saturated_.begin(), saturated_.end());
-  state.mode(obeyed_.empty() ? msg::DRIVER_HOLDING : msg::DRIVER_ACTIVE);
-  state.reason(reason_.substr(0, 255));
-  state.obeyed_controller_id(obeyed_);
-  state.obeyed_priority(obeyed_.empty() ? 0 : controllers_.at(obeyed_).priority);
-  state.commands_applied(applied_count_);
-  state.commands_rejected(rejected_);
-  state.commands_limited(limited_);
-  state.controller_switches(switches_);
-  state.last_rejection(last_rejection_.substr(0, 255));
+DriverState DriverCore::State(int64_t wall_ns) const {
+  DriverState state;
+  state.sequence = sequence_;
+  state.answers_sample = answers_sample_;
+  state.sample_time_ns = sample_time_ns_;
+  state.sample_publish_time_ns = sample_publish_time_ns_;
+  state.command_receive_time_ns = command_receive_time_ns_;
+  state.publish_time_ns = wall_ns;
+  state.motion = applied_;
+  state.saturated = saturated_;
+  state.mode = obeyed_.empty() ? DriverMode::kHolding : DriverMode::kActive;
+  state.reason = reason_;
+  state.obeyed_controller_id = obeyed_;
+  state.obeyed_priority = obeyed_.empty() ? 0 : controllers_.at(obeyed_).priority;
+  state.commands_applied = applied_count_;
+  state.commands_rejected = rejected_;
+  state.commands_limited = limited_;
+  state.controller_switches = switches_;
+  state.last_rejection = last_rejection_;
   return state;
 }
 
-msg::WaveplateState DriverCore::Publishable(int64_t wall_ns) {
+DriverState DriverCore::Publishable(int64_t wall_ns) {
   ++sequence_;
   return State(wall_ns);
 }

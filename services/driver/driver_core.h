@@ -23,9 +23,10 @@
 //     2-ms timeout, 30 at 1.5 ms (the default).
 // Tick() runs when the next such deadline is due (at most every 0.25 ms).
 //
-// Every command is checked (CheckCommandShape: stage count, NaN/Inf, oversized; and against the
-// driver's own record of the bench's samples, SampleTimeline: it must answer a sample the bench
-// published, at that sample's time) and a bad one is counted and reported, never applied. A good one is clamped to each control's range and
+// Every command is checked (its shape at the service's edge, bus::ReadCommand: stage count,
+// NaN/Inf, oversized; here against the driver's own record of the bench's samples,
+// SampleTimeline: it must answer a sample the bench published, at that sample's time) and a bad
+// one is counted and reported, never applied. A good one is clamped to each control's range and
 // slew-limited (max_slew_per_s × the driver's own time since the last applied command: a
 // command's timestamps never widen the limit); the state says which stages were limited. The
 // range and the slew limit are the device's own (WaveplateBackend::limits(), finite), narrowed
@@ -50,8 +51,8 @@
 #include <string>
 #include <vector>
 
+#include "dpc/bench/bench_messages.h"
 #include "dpc/config/scenario_config.h"
-#include "dpc/msg/bench.h"
 #include "dpc/optics/waveplate_chain.h"
 #include "sample_timeline.h"
 #include "waveplate_backend.h"
@@ -59,7 +60,6 @@
 namespace dpc::services {
 
 struct DriverSettings {
-  std::string bench_id = "bench1";
   std::string driver_id = "driver";
   double max_slew_per_s = 0.0;        ///< φ units per second; 0: the device's own limit
   double min_silence_s = 1.5e-3;      ///< shortest silence that counts as a dead controller
@@ -79,16 +79,21 @@ class DriverCore {
   /// Returns true if it shows a new bench run (numbering from 1 again): nobody is behind.
   bool OnSample(uint64_t sequence, int64_t sample_time_ns, int64_t publish_time_ns);
 
-  /// A command arrived at `now_ns` (monotonic) / `wall_ns` (wall clock). Returns the state to
-  /// publish: after applying it (obeyed controller), after refusing it (so a lockstep bench
-  /// still gets its answer), or when it made this controller the obeyed one; nullopt for a
-  /// standby controller's command.
-  std::optional<msg::WaveplateState> OnCommand(const msg::WaveplateCommand& command,
-                                               int64_t now_ns, int64_t wall_ns);
+  /// A well-formed command (bus::ReadCommand) arrived at `now_ns` (monotonic) / `wall_ns`
+  /// (wall clock). Returns the state to publish: after applying it (obeyed controller), after
+  /// refusing it (so a lockstep bench still gets its answer), or when it made this controller
+  /// the obeyed one; nullopt for a standby controller's command or one that answers no sample of
+  /// the bench.
+  std::optional<DriverState> OnCommand(const ControllerCommand& command, int64_t now_ns, int64_t wall_ns);
+  /// A malformed command (`reason`: why bus::ReadCommand refused it) from `controller_id`,
+  /// answering `answers_sample`: counted and reported; if it came from the obeyed controller,
+  /// its sample is answered with φ unchanged (a lockstep bench waits for it).
+  std::optional<DriverState> OnMalformedCommand(const std::string& controller_id, uint64_t answers_sample,
+                                                const std::string& reason, int64_t wall_ns);
 
   /// Periodic check at `now_ns`: failover or hold when the obeyed controller fell silent, and
   /// the holding heartbeat. Returns the state to publish, if any.
-  std::optional<msg::WaveplateState> Tick(int64_t now_ns, int64_t wall_ns);
+  std::optional<DriverState> Tick(int64_t now_ns, int64_t wall_ns);
 
   /// When Tick next has something to do (monotonic ns): the obeyed controller's silence
   /// deadline, or the next holding heartbeat. The ticker sleeps until then (capped by its
@@ -96,10 +101,10 @@ class DriverCore {
   int64_t NextTickNs() const;
 
   /// The current state, without numbering it (inspection).
-  msg::WaveplateState State(int64_t wall_ns) const;
+  DriverState State(int64_t wall_ns) const;
   /// The current state as the next one to publish (e.g. the first, at start-up): its
-  /// sequence_number is one more than the previous published state's, starting at 1.
-  msg::WaveplateState Publishable(int64_t wall_ns);
+  /// sequence is one more than the previous published state's, starting at 1.
+  DriverState Publishable(int64_t wall_ns);
 
   const std::string& obeyed() const { return obeyed_; }
   /// The newest sample the bench published, as far as the driver knows (0: none yet).
@@ -148,8 +153,9 @@ class DriverCore {
   void Obey(const std::string& id, const std::string& reason);
   void Hold(const std::string& reason);
   void Reject(const std::string& controller_id, const std::string& reason);
-  /// The next state answers `command`'s sample (its times; the command's arrival at `wall_ns`).
-  void Answer(const msg::WaveplateCommand& command, int64_t wall_ns);
+  /// The next state answers `sample` (its times from the record; the command's arrival at
+  /// `wall_ns`).
+  void Answer(uint64_t sample, int64_t wall_ns);
   /// Sets the backend's motion to where it ends, with no rate (holding).
   void StopMotion();
 
@@ -168,8 +174,8 @@ class DriverCore {
   uint64_t newest_answered_ = 0;     ///< the newest sample any controller answered
   std::array<FirstAnswer, kAnswerRing> first_answers_{};
   std::string reason_;
-  bus::AppliedTrajectory applied_;  ///< what the backend does (its Applied())
-  std::vector<bool> saturated_;
+  WaveplateMotion applied_;         ///< what the backend does (its Applied())
+  std::array<bool, kMaxControls> saturated_{};
   int64_t last_applied_ns_ = 0;       ///< the driver's clock when the last command was applied
   bool applied_any_ = false;
   uint64_t answers_sample_ = 0;

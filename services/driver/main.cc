@@ -14,7 +14,7 @@
 #include "driver_core.h"
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/message_conversion.h"
-#include "dpc/bus/wall_clock.h"
+#include "dpc/bench/clock.h"
 #include "dpc/config/scenario_builders.h"
 #include "dpc/config/scenario_error.h"
 #include "dpc/config/scenario_validation.h"
@@ -56,7 +56,6 @@ int Run(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
-  settings.bench_id = common.bench_id;
   SetUpLogging("driver", common);
 
   ScenarioConfig scenario;
@@ -88,18 +87,21 @@ int Run(int argc, char** argv) {
     auto device_writer = participant.MakeWriter<msg::DeviceDescription>();
     auto target_writer = participant.MakeWriter<msg::Target>();
     auto reply_writer = participant.MakeWriter<msg::TargetReply>();
-    device_writer->Write(bus::DescribeDevice(scenario.stages, common.bench_id, settings.driver_id,
-                                             core.max_slew_per_s(), settings.max_ramp_s));
+    device_writer->Write(bus::DeviceMessage(
+        DeviceDescription{settings.driver_id, scenario.stages, core.max_slew_per_s(), settings.max_ramp_s},
+        common.bench_id));
     uint64_t target_revision = 1;
-    target_writer->Write(bus::TargetMessage(scenario.target, common.bench_id, target_revision, ""));
+    target_writer->Write(bus::TargetMessage(BenchTarget{target_revision, "", scenario.target}, common.bench_id));
 
     std::string last_reason;
-    auto publish = [&](msg::WaveplateState state) {
-      state.publish_time_ns(bus::WallClockNs());  // after applying: the loop's last timestamp
-      state_writer->Write(state);
-      if (state.reason() != last_reason) {
-        last_reason = state.reason();
-        if (state.mode() == msg::DRIVER_HOLDING) {
+    msg::WaveplateState state_message;  // written in place: no allocation per state
+    auto publish = [&](DriverState state) {
+      state.publish_time_ns = WallClockNs();  // after applying: the loop's last timestamp
+      bus::WriteState(state, common.bench_id, &state_message);
+      state_writer->Write(state_message);
+      if (state.reason != last_reason) {
+        last_reason = state.reason;
+        if (state.mode == DriverMode::kHolding) {
           spdlog::warn("{}", last_reason);
         } else {
           spdlog::info("{}", last_reason);
@@ -108,23 +110,29 @@ int Run(int argc, char** argv) {
     };
     {
       std::lock_guard<std::mutex> lock(mutex);
-      publish(core.Publishable(bus::WallClockNs()));
+      publish(core.Publishable(WallClockNs()));
     }
     // The driver's own record of the bench's samples: a command is judged by it (SampleTimeline).
     auto samples = participant.MakeReader<msg::StokesSample>(
-        common.bench_id, [&](const msg::StokesSample& sample, const auto&) {
-          if (sample.sequence_number() == 0) return;
+        common.bench_id, [&](const msg::StokesSample& message, const auto&) {
+          BenchSample sample;
+          if (!bus::ReadSample(message, &sample).empty()) return;  // the controllers report those
           std::lock_guard<std::mutex> lock(mutex);
-          if (core.OnSample(sample.sequence_number(), sample.sample_time_ns(), sample.publish_time_ns())) {
-            spdlog::info("the bench started a new run (sample {})", sample.sequence_number());
+          if (core.OnSample(sample.sequence, sample.time_ns, sample.publish_time_ns)) {
+            spdlog::info("the bench started a new run (sample {})", sample.sequence);
           }
         });
     RejectionLog rejections("rejected command");
+    ControllerCommand command;  // read into in place, under the lock
     auto commands = participant.MakeReader<msg::WaveplateCommand>(
-        common.bench_id, [&](const msg::WaveplateCommand& command, const auto&) {
-          const int64_t wall_ns = bus::WallClockNs();
+        common.bench_id, [&](const msg::WaveplateCommand& message, const auto&) {
+          const int64_t wall_ns = WallClockNs();
           std::lock_guard<std::mutex> lock(mutex);
-          if (auto state = core.OnCommand(command, bus::MonotonicNs(), wall_ns)) publish(*state);
+          const std::string malformed = bus::ReadCommand(message, core.control_count(), &command);
+          auto state = malformed.empty()
+                           ? core.OnCommand(command, MonotonicNs(), wall_ns)
+                           : core.OnMalformedCommand(command.controller_id, command.answers_sample, malformed, wall_ns);
+          if (state) publish(std::move(*state));
           rejections.Update(core.commands_rejected(), core.last_rejection());
         });
     auto requests = participant.MakeReader<msg::TargetRequest>(
@@ -136,8 +144,8 @@ int Run(int argc, char** argv) {
             const TargetConfig target = bus::TargetFromRequest(request);
             std::lock_guard<std::mutex> lock(mutex);
             ++target_revision;
-            target_writer->Write(bus::TargetMessage(target, common.bench_id, target_revision,
-                                                    request.request_id().to_string()));
+            target_writer->Write(bus::TargetMessage(
+                BenchTarget{target_revision, request.request_id().to_string(), target}, common.bench_id));
             reply.accepted(true);
             reply.revision(target_revision);
             reply.message("target revision " + std::to_string(target_revision));
@@ -161,8 +169,8 @@ int Run(int argc, char** argv) {
         int64_t due_ns;
         {
           std::lock_guard<std::mutex> lock(mutex);
-          const int64_t now_ns = bus::MonotonicNs();
-          if (auto state = core.Tick(now_ns, bus::WallClockNs())) publish(*state);
+          const int64_t now_ns = MonotonicNs();
+          if (auto state = core.Tick(now_ns, WallClockNs())) publish(*state);
           due_ns = std::clamp(core.NextTickNs(), now_ns + tick_ns, now_ns + max_sleep_ns);
         }
         std::this_thread::sleep_until(std::chrono::steady_clock::time_point(std::chrono::nanoseconds(due_ns)));

@@ -42,14 +42,16 @@ std::optional<SampleTimeline::Sample> SampleTimeline::Find(uint64_t sequence) co
 }
 
 std::string SampleTimeline::CheckAnswer(uint64_t sequence, int64_t claimed_time_ns) const {
-  if (sequence == 0) return "answers_sample 0: answers no sample";
-  if (const std::optional<Sample> known = Find(sequence)) {
-    if (known->time_ns != claimed_time_ns) {
-      return fmt::format("sample_time_ns {} is not the time of sample {} ({})", claimed_time_ns, sequence,
-                         known->time_ns);
-    }
-    return {};
+  if (const std::optional<Sample> known = Find(sequence); known && known->time_ns != claimed_time_ns) {
+    return fmt::format("sample_time_ns {} is not the time of sample {} ({})", claimed_time_ns, sequence,
+                       known->time_ns);
   }
+  return CheckSequence(sequence);
+}
+
+std::string SampleTimeline::CheckSequence(uint64_t sequence) const {
+  if (sequence == 0) return "answers_sample 0: answers no sample";
+  if (Find(sequence)) return {};
   if (sequence > newest_.sequence && sequence - newest_.sequence > kMaxLead) {
     return newest_.sequence == 0
                ? fmt::format("answers sample {}, but no sample of the bench has arrived yet", sequence)

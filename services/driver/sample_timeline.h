@@ -45,7 +45,11 @@ class SampleTimeline {
   /// The record of `sequence`, if it is one of the latest kCapacity samples seen.
   std::optional<Sample> Find(uint64_t sequence) const;
 
-  /// Empty if a command may answer `sequence` with `claimed_time_ns`; else why not.
+  /// Empty if a command may answer `sequence`: one the bench published (recorded), or at most
+  /// kMaxLead past the newest; else why not.
+  std::string CheckSequence(uint64_t sequence) const;
+  /// Empty if a command may answer `sequence` with `claimed_time_ns`: CheckSequence, and the
+  /// claimed time is the recorded one; else why not.
   std::string CheckAnswer(uint64_t sequence, int64_t claimed_time_ns) const;
 
   /// The bench time of `sequence` (one that passed CheckAnswer): recorded, or extrapolated from

@@ -3,14 +3,13 @@
 // DAC, a piezo controller, a motor stage) implements the same interface later.
 //
 // A command is a motion, not only a point: φ at the ramp's start plus a rate in bench time,
-// for a bounded interval (bus::AppliedTrajectory). A backend with its own update clock (a DAC
+// for a bounded interval (WaveplateMotion). A backend with its own update clock (a DAC
 // written every few µs) follows the ramp; one that cannot ramp applies the point and reports
 // a zero rate in Applied(), and the state then says the waveplates hold.
 
 #include <string>
 
-#include "dpc/bus/message_conversion.h"
-#include "dpc/optics/waveplate_chain.h"
+#include "dpc/bench/waveplate_motion.h"
 
 namespace dpc::services {
 
@@ -28,9 +27,9 @@ class WaveplateBackend {
   virtual DeviceLimits limits() const = 0;
   /// Drives the waveplates along `motion` (already inside the ranges and slew limits). Returns
   /// an empty string on success, else what went wrong (the driver then holds and reports it).
-  virtual std::string Apply(const bus::AppliedTrajectory& motion) = 0;
+  virtual std::string Apply(const WaveplateMotion& motion) = 0;
   /// What the device reports it is doing (the simulated device: exactly the last Apply).
-  virtual const bus::AppliedTrajectory& Applied() const = 0;
+  virtual const WaveplateMotion& Applied() const = 0;
   virtual std::string name() const = 0;
 };
 
@@ -41,21 +40,18 @@ class WaveplateBackend {
 class SimulatedWaveplates final : public WaveplateBackend {
  public:
   explicit SimulatedWaveplates(const ControlVector& initial_phi, DeviceLimits limits = {})
-      : limits_(limits) {
-    motion_.phi = initial_phi;
-    motion_.rate_per_s = ControlVector::Zero(initial_phi.size());
-  }
+      : limits_(limits), motion_(WaveplateMotion::Still(initial_phi)) {}
   DeviceLimits limits() const override { return limits_; }
-  std::string Apply(const bus::AppliedTrajectory& motion) override {
+  std::string Apply(const WaveplateMotion& motion) override {
     motion_ = motion;
     return {};
   }
-  const bus::AppliedTrajectory& Applied() const override { return motion_; }
+  const WaveplateMotion& Applied() const override { return motion_; }
   std::string name() const override { return "simulated"; }
 
  private:
   DeviceLimits limits_;
-  bus::AppliedTrajectory motion_;
+  WaveplateMotion motion_;
 };
 
 }  // namespace dpc::services

@@ -7,8 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "dpc/bus/message_conversion.h"
-#include "dpc/bus/wall_clock.h"
+#include "dpc/bench/clock.h"
 #include "dpc/config/scenario_builders.h"
 #include "dpc/config/scenario_validation.h"
 #include "dpc/sim/delay_line.h"
@@ -46,22 +45,15 @@ BenchCore::BenchCore(ScenarioConfig scenario, BenchSettings settings)
 
 BenchCore::~BenchCore() = default;
 
-std::string BenchCore::CheckApplied(const msg::WaveplateState& state) const {
-  return bus::CheckStateShape(state, chain_->control_count());
-}
-
-msg::StokesSample BenchCore::MakeSample(uint64_t sequence, int64_t sample_time_ns,
-                                        const StokesVector& s_in, const StokesVector& s_out) const {
-  msg::StokesSample sample;
-  sample.bench_id(settings_.bench_id);
-  sample.sequence_number(sequence);
-  sample.sample_time_ns(sample_time_ns);
-  sample.s_in(bus::ToArray(s_in));
-  sample.s_out(bus::ToArray(s_out));
-  sample.optical_power_known(false);
-  sample.optical_power_w(0.0);
-  sample.lockstep(settings_.lockstep);
-  sample.publish_time_ns(bus::WallClockNs());
+BenchSample BenchCore::MakeSample(uint64_t sequence, int64_t sample_time_ns, const StokesVector& s_in,
+                                  const StokesVector& s_out) const {
+  BenchSample sample;
+  sample.sequence = sequence;
+  sample.time_ns = sample_time_ns;
+  sample.s_in = s_in;
+  sample.s_out = s_out;
+  sample.lockstep = settings_.lockstep;
+  sample.publish_time_ns = WallClockNs();
   return sample;
 }
 
@@ -101,7 +93,7 @@ BenchReport BenchCore::RunLockstep(BenchLink* link, SimulationObserver* observer
         run.observer().OnSample(SampleView{k, t_s, s_in, s_out, applied.phi,
                                            target_->DistanceRad(s_out) * kRadToDeg});
       }
-      const msg::StokesSample sample =
+      const BenchSample sample =
           MakeSample(static_cast<uint64_t>(k + 1), SecondsToNs(t_s), in_measured, out_measured);
       link->Publish(sample);
       ++report.published;
@@ -153,13 +145,11 @@ BenchReport BenchCore::RunRealTime(BenchLink* link, SimulationObserver* observer
   ControlVector phi = initial_phi_;
   ControlVector phi_now = initial_phi_;
   // The latest state's motion, copied in without allocating (its vectors keep their size).
-  bus::AppliedTrajectory motion;
-  motion.phi = initial_phi_;
-  motion.rate_per_s = ControlVector::Zero(initial_phi_.size());
+  WaveplateMotion motion = WaveplateMotion::Still(initial_phi_);
   chain.ComputePose(phi, &pose);
 
   BenchReport report;
-  const int64_t start_ns = bus::MonotonicNs();
+  const int64_t start_ns = MonotonicNs();
   int64_t next_ns = start_ns;
   int64_t k = 0;
   for (; k < total; ++k) {
@@ -167,8 +157,8 @@ BenchReport BenchCore::RunRealTime(BenchLink* link, SimulationObserver* observer
       report.stop_reason = "stopped";
       break;
     }
-    bus::SleepUntilMonotonicNs(next_ns);
-    const int64_t now_ns = bus::MonotonicNs();
+    SleepUntilMonotonicNs(next_ns);
+    const int64_t now_ns = MonotonicNs();
     if (now_ns - next_ns > period_ns) {
       // Came late by more than a period: count it and do not try to catch up in a burst.
       report.overruns += (now_ns - next_ns) / period_ns;
@@ -206,7 +196,7 @@ BenchReport BenchCore::RunRealTime(BenchLink* link, SimulationObserver* observer
       break;
     }
   }
-  const double wall_s = static_cast<double>(bus::MonotonicNs() - start_ns) * 1e-9;
+  const double wall_s = static_cast<double>(MonotonicNs() - start_ns) * 1e-9;
   report.samples = k;
   report.result.summary = statistics->Summarize(k, 0);
   report.result.wall_time_s = wall_s;

@@ -16,7 +16,7 @@
 // describes a motion (a ramp, see WaveplateState) is evaluated at each sample's bench time:
 // the waveplates move between states as a device that ramps its drive would.
 //
-// DDS-free: the service's main.cc connects it to the bus through BenchLink.
+// Transport-free: the service's main.cc connects it to the bus through BenchLink.
 
 #include <atomic>
 #include <cstdint>
@@ -25,10 +25,9 @@
 #include <optional>
 #include <string>
 
-#include "dpc/bus/message_conversion.h"
+#include "dpc/bench/bench_messages.h"
 #include "dpc/config/scenario_config.h"
 #include "dpc/control/target.h"
-#include "dpc/msg/bench.h"
 #include "dpc/optics/waveplate_chain.h"
 #include "dpc/sim/closed_loop_simulator.h"
 
@@ -38,21 +37,21 @@ namespace dpc::services {
 class BenchLink {
  public:
   virtual ~BenchLink() = default;
-  virtual void Publish(const msg::StokesSample& sample) = 0;
-  /// Lockstep: waits for the applied φ of the state answering `sequence` (the link re-publishes
+  virtual void Publish(const BenchSample& sample) = 0;
+  /// Lockstep: waits for the applied φ of the state answering `sample` (the link re-publishes
   /// the sample if no answer comes, e.g. before a controller matched). nullopt: stop (signal or
   /// timeout; `why` says which).
-  virtual std::optional<ControlVector> AwaitAnswer(const msg::StokesSample& sample, std::string* why) = 0;
-  /// Real time: if a valid state arrived since the last call, copies the waveplates' motion it
-  /// describes into `*motion` (sized for the device, so nothing is allocated) and returns true.
-  virtual bool TakeApplied(bus::AppliedTrajectory* motion) = 0;
+  virtual std::optional<ControlVector> AwaitAnswer(const BenchSample& sample, std::string* why) = 0;
+  /// Real time: if a valid state (one value per control) arrived since the last call, copies
+  /// the waveplates' motion it describes into `*motion` (sized for the device, so nothing is
+  /// allocated) and returns true.
+  virtual bool TakeApplied(WaveplateMotion* motion) = 0;
   /// Real time: the latest accepted target, if it changed since the last call.
   virtual std::optional<TargetConfig> TargetChange() = 0;
   virtual bool stop_requested() = 0;
 };
 
 struct BenchSettings {
-  std::string bench_id = "bench1";
   bool lockstep = false;
   double rate_hz = 10e3;           ///< real time
   double duration_s = 0.0;         ///< real time: 0 runs until stopped
@@ -81,14 +80,12 @@ class BenchCore {
   const ScenarioConfig& scenario() const { return scenario_; }
   const WaveplateChain& chain() const { return *chain_; }
   int control_count() const { return chain_->control_count(); }
-  /// Whether a state fits the device (bus::CheckStateShape): empty, or why not.
-  std::string CheckApplied(const msg::WaveplateState& state) const;
 
  private:
   BenchReport RunLockstep(BenchLink* link, SimulationObserver* observer);
   BenchReport RunRealTime(BenchLink* link, SimulationObserver* observer);
-  msg::StokesSample MakeSample(uint64_t sequence, int64_t sample_time_ns, const StokesVector& s_in,
-                               const StokesVector& s_out) const;
+  BenchSample MakeSample(uint64_t sequence, int64_t sample_time_ns, const StokesVector& s_in,
+                         const StokesVector& s_out) const;
 
   ScenarioConfig scenario_;
   BenchSettings settings_;

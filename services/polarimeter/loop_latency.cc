@@ -1,5 +1,7 @@
 #include "loop_latency.h"
 
+#include <cmath>
+
 namespace dpc::services {
 namespace {
 
@@ -28,16 +30,21 @@ LoopLatencyRecorder::LoopLatencyRecorder(int64_t since_wall_ns)
       to_state_published_us_(1e-2, kMaxSpanUs, 8),
       to_state_received_us_(1e-2, kMaxSpanUs, 8) {}
 
-void LoopLatencyRecorder::OnState(const msg::WaveplateState& state, int64_t receive_wall_ns) {
-  if (state.answers_sample() <= last_answered_ || state.sample_publish_time_ns() <= 0 ||
-      state.sample_publish_time_ns() < since_wall_ns_) {
+void LoopLatencyRecorder::OnState(const DriverState& state, int64_t receive_wall_ns) {
+  if (state.answers_sample <= last_answered_ || state.sample_publish_time_ns <= 0 ||
+      state.sample_publish_time_ns < since_wall_ns_) {
     return;
   }
-  last_answered_ = state.answers_sample();
-  const int64_t origin_ns = state.sample_publish_time_ns();
-  const double to_driver_us = static_cast<double>(state.command_receive_time_ns() - origin_ns) * 1e-3;
-  const double to_published_us = static_cast<double>(state.publish_time_ns() - origin_ns) * 1e-3;
-  const double to_received_us = static_cast<double>(receive_wall_ns - origin_ns) * 1e-3;
+  last_answered_ = state.answers_sample;
+  const int64_t origin_ns = state.sample_publish_time_ns;
+  // A peer's fields are arbitrary: a difference that does not fit an int64 is implausible (NaN).
+  const auto span_us = [origin_ns](int64_t t_ns) {
+    int64_t span_ns;
+    return __builtin_sub_overflow(t_ns, origin_ns, &span_ns) ? NAN : static_cast<double>(span_ns) * 1e-3;
+  };
+  const double to_driver_us = span_us(state.command_receive_time_ns);
+  const double to_published_us = span_us(state.publish_time_ns);
+  const double to_received_us = span_us(receive_wall_ns);
   auto plausible = [](double us) { return us >= 0.0 && us <= kMaxSpanUs; };
   if (!plausible(to_driver_us) || !plausible(to_published_us) || !plausible(to_received_us)) {
     ++implausible_;

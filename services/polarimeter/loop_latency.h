@@ -19,7 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "dpc/msg/bench.h"
+#include "dpc/bench/bench_messages.h"
 #include "dpc/sim/log_histogram.h"
 
 namespace dpc::services {
@@ -30,7 +30,7 @@ class LoopLatencyRecorder {
   explicit LoopLatencyRecorder(int64_t since_wall_ns = 0);
 
   /// One received state, `receive_wall_ns` its arrival (CLOCK_REALTIME). Not thread-safe.
-  void OnState(const msg::WaveplateState& state, int64_t receive_wall_ns);
+  void OnState(const DriverState& state, int64_t receive_wall_ns);
 
   /// Per span: count, p50, p99, p99.9 and max in µs (null percentiles when empty).
   nlohmann::ordered_json Json() const;

@@ -13,7 +13,7 @@
 #include "bench_core.h"
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/message_conversion.h"
-#include "dpc/bus/wall_clock.h"
+#include "dpc/bench/clock.h"
 #include "dpc/config/scenario_error.h"
 #include "dpc/sim/trace_writer.h"
 #include "json_report.h"
@@ -28,11 +28,12 @@ class DdsBenchLink final : public BenchLink {
  public:
   DdsBenchLink(bus::BusParticipant* participant, const BenchCore* bench, const std::string& bench_id,
                ShutdownSignals* signals, double lockstep_timeout_s, double latency_warmup_s)
-      : bench_(bench),
+      : bench_id_(bench_id),
+        control_count_(bench->control_count()),
         signals_(signals),
         lockstep_timeout_s_(lockstep_timeout_s),
-        latest_{ControlVector::Zero(bench->control_count()), ControlVector::Zero(bench->control_count())},
-        latency_(bus::WallClockNs() + static_cast<int64_t>(latency_warmup_s * 1e9)) {
+        latest_(WaveplateMotion::Still(ControlVector::Zero(bench->control_count()))),
+        latency_(WallClockNs() + static_cast<int64_t>(latency_warmup_s * 1e9)) {
     writer_ = participant->MakeWriter<msg::StokesSample>();
     states_ = participant->MakeReader<msg::WaveplateState>(
         bench_id, [this](const msg::WaveplateState& state, const auto&) { OnState(state); });
@@ -44,11 +45,14 @@ class DdsBenchLink final : public BenchLink {
     targets_.reset();
   }
 
-  void Publish(const msg::StokesSample& sample) override { writer_->Write(sample); }
+  void Publish(const BenchSample& sample) override {
+    bus::WriteSample(sample, bench_id_, &sample_message_);
+    writer_->Write(sample_message_);
+  }
 
-  std::optional<ControlVector> AwaitAnswer(const msg::StokesSample& sample, std::string* why) override {
+  std::optional<ControlVector> AwaitAnswer(const BenchSample& sample, std::string* why) override {
     std::unique_lock<std::mutex> lock(mutex_);
-    awaited_ = sample.sequence_number();
+    awaited_ = sample.sequence;
     const auto deadline = std::chrono::steady_clock::now() +
                           std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                               std::chrono::duration<double>(lockstep_timeout_s_));
@@ -63,12 +67,12 @@ class DdsBenchLink final : public BenchLink {
         if (std::chrono::steady_clock::now() > deadline) {
           *why = fmt::format("no state answered sample {} within {} s (is a driver and a "
                              "controller running on this domain and bench id?)",
-                             sample.sequence_number(), lockstep_timeout_s_);
+                             sample.sequence, lockstep_timeout_s_);
           return std::nullopt;
         }
-        msg::StokesSample again = sample;
-        again.publish_time_ns(bus::WallClockNs());
-        writer_->Write(again);
+        BenchSample again = sample;
+        again.publish_time_ns = WallClockNs();
+        Publish(again);
         lock.lock();
       }
     }
@@ -77,7 +81,7 @@ class DdsBenchLink final : public BenchLink {
     return phi;
   }
 
-  bool TakeApplied(bus::AppliedTrajectory* motion) override {
+  bool TakeApplied(WaveplateMotion* motion) override {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!latest_fresh_) return false;
     *motion = latest_;  // ControlVector has fixed storage: copying allocates nothing
@@ -107,38 +111,39 @@ class DdsBenchLink final : public BenchLink {
   const bus::ReaderCounters& state_counters() const { return states_->counters(); }
 
  private:
-  void OnState(const msg::WaveplateState& state) {
-    const int64_t receive_wall_ns = bus::WallClockNs();
-    if (std::string reason = bench_->CheckApplied(state); !reason.empty()) {
-      std::lock_guard<std::mutex> lock(mutex_);
+  void OnState(const msg::WaveplateState& message) {
+    const int64_t receive_wall_ns = WallClockNs();
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (std::string reason = bus::ReadState(message, control_count_, &state_); !reason.empty()) {
       rejections_.Update(++rejected_states_, reason);
       return;
     }
-    std::lock_guard<std::mutex> lock(mutex_);
-    latency_.OnState(state, receive_wall_ns);
-    // CheckApplied guarantees one value per control: latest_ keeps its size, nothing allocates.
-    bus::ReadTrajectory(state, &latest_);
+    latency_.OnState(state_, receive_wall_ns);
+    // One value per control: latest_ keeps its size, nothing allocates.
+    latest_ = state_.motion;
     latest_fresh_ = true;
-    if (awaited_ != 0 && state.answers_sample() == awaited_) {
+    if (awaited_ != 0 && state_.answers_sample == awaited_) {
       answer_ = latest_.phi;  // lockstep: the point (lockstep controllers send no rate)
       awaited_ = 0;
       answered_.notify_one();
     }
   }
   void OnTarget(const msg::Target& message) {
-    try {
-      TargetConfig target = bus::TargetFromMessage(message);
-      std::lock_guard<std::mutex> lock(mutex_);
-      if (message.revision() > target_revision_) {
-        target_revision_ = message.revision();
-        target_change_ = target;
-      }
-    } catch (const std::exception& e) {
-      spdlog::warn("rejected target revision {}: {}", message.revision(), e.what());
+    BenchTarget target;
+    if (std::string reason = bus::ReadTarget(message, &target); !reason.empty()) {
+      spdlog::warn("rejected target revision {}: {}", message.revision(), reason);
+      return;
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (target.revision > target_revision_) {
+      target_revision_ = target.revision;
+      target_change_ = target.target;
     }
   }
 
-  const BenchCore* bench_;
+  std::string bench_id_;
+  int control_count_;
+  msg::StokesSample sample_message_;  ///< written in place (Publish runs on the bench's thread)
   ShutdownSignals* signals_;
   double lockstep_timeout_s_;
   std::unique_ptr<bus::Writer<msg::StokesSample>> writer_;
@@ -148,7 +153,8 @@ class DdsBenchLink final : public BenchLink {
   std::condition_variable answered_;
   uint64_t awaited_ = 0;
   std::optional<ControlVector> answer_;
-  bus::AppliedTrajectory latest_;  ///< the latest valid state's motion (one value per control)
+  WaveplateMotion latest_;      ///< the latest valid state's motion (one value per control)
+  DriverState state_;           ///< read into in place, under mutex_
   bool latest_fresh_ = false;   ///< latest_ arrived since the last TakeApplied
   std::optional<TargetConfig> target_change_;
   uint64_t target_revision_ = 1;  // revision 1 is the scenario's target, the bench's own
@@ -201,7 +207,6 @@ int Run(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
-  settings.bench_id = common.bench_id;
   SetUpLogging("polarimeter", common);
 
   std::unique_ptr<BenchCore> bench;

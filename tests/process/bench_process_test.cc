@@ -14,7 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "dpc/bus/bus_participant.h"
-#include "dpc/bus/wall_clock.h"
+#include "dpc/bench/clock.h"
 #include "support/child_process.h"
 #include "support/json_lines.h"
 
@@ -46,7 +46,7 @@ class BenchProcessTest : public ::testing::Test {
     states_ = participant_->MakeReader<msg::WaveplateState>(
         "bench1", [this](const msg::WaveplateState& state, const auto&) {
           std::lock_guard<std::mutex> lock(mutex_);
-          seen_.push_back({state, bus::MonotonicNs()});
+          seen_.push_back({state, MonotonicNs()});
         });
     samples_ = participant_->MakeReader<msg::StokesSample>(
         "bench1", [this](const msg::StokesSample& sample, const auto&) {

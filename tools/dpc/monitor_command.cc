@@ -57,13 +57,14 @@ void MonitorState::OnStatus(const msg::ControllerStatus& status) {
 void MonitorState::OnTarget(const msg::Target& target) {
   if (target.revision() < target_revision_) return;  // an older sample arriving late
   target_revision_ = target.revision();
-  try {
-    target_ = BuildTarget(bus::TargetFromMessage(target));
-    target_problem_.clear();
-  } catch (const std::exception& e) {
+  BenchTarget read;
+  if (std::string problem = bus::ReadTarget(target, &read); !problem.empty()) {
     target_.reset();
-    target_problem_ = e.what();
+    target_problem_ = problem;
+    return;
   }
+  target_ = BuildTarget(read.target);
+  target_problem_.clear();
 }
 
 std::string MonitorState::TakeLine(double elapsed_s) {

@@ -9,7 +9,7 @@
 #include "bus_messages.h"
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/message_conversion.h"
-#include "dpc/bus/wall_clock.h"
+#include "dpc/bench/clock.h"
 #include "dpc/config/scenario_error.h"
 #include "dpc/config/scenario_validation.h"
 #include "exit_codes.h"
@@ -29,7 +29,7 @@ std::string FlagOf(const std::string& location, bool linear) {
 }
 
 std::string FreshRequestId() {
-  return fmt::format("dpc-target-{}-{}", static_cast<long>(getpid()), bus::WallClockNs());
+  return fmt::format("dpc-target-{}-{}", static_cast<long>(getpid()), WallClockNs());
 }
 
 }  // namespace

@@ -115,20 +115,56 @@ std::string CheckUnitStokes(const std::array<double, 3>& s, const char* field) {
   return {};
 }
 
-std::string CheckStokesSample(const msg::StokesSample& sample) {
-  if (sample.sequence_number() == 0) return "sequence_number 0 (sequences start at 1)";
-  if (std::string reason = CheckUnitStokes(sample.s_in(), "s_in"); !reason.empty()) return reason;
-  if (std::string reason = CheckUnitStokes(sample.s_out(), "s_out"); !reason.empty()) return reason;
-  if (sample.optical_power_known() &&
-      !(std::isfinite(sample.optical_power_w()) && sample.optical_power_w() >= 0.0)) {
-    return fmt::format("optical_power_w = {} is not a finite power >= 0", sample.optical_power_w());
+std::string ReadSample(const msg::StokesSample& message, BenchSample* out) {
+  if (message.sequence_number() == 0) return "sequence_number 0 (sequences start at 1)";
+  if (std::string reason = CheckUnitStokes(message.s_in(), "s_in"); !reason.empty()) return reason;
+  if (std::string reason = CheckUnitStokes(message.s_out(), "s_out"); !reason.empty()) return reason;
+  if (message.optical_power_known() &&
+      !(std::isfinite(message.optical_power_w()) && message.optical_power_w() >= 0.0)) {
+    return fmt::format("optical_power_w = {} is not a finite power >= 0", message.optical_power_w());
   }
+  out->sequence = message.sequence_number();
+  out->time_ns = message.sample_time_ns();
+  out->publish_time_ns = message.publish_time_ns();
+  out->s_in = ToStokes(message.s_in());
+  out->s_out = ToStokes(message.s_out());
+  out->optical_power_w = message.optical_power_known() ? std::optional<double>(message.optical_power_w())
+                                                       : std::nullopt;
+  out->lockstep = message.lockstep();
   return {};
 }
 
-std::string CheckCommandShape(const msg::WaveplateCommand& command, int control_count) {
-  const size_t count = command.phi().size();
-  if (command.controller_id().size() == 0) return "empty controller_id";
+void WriteSample(const BenchSample& sample, const std::string& bench_id, msg::StokesSample* out) {
+  out->bench_id(bench_id);
+  out->sequence_number(sample.sequence);
+  out->sample_time_ns(sample.time_ns);
+  out->publish_time_ns(sample.publish_time_ns);
+  out->s_in(ToArray(sample.s_in));
+  out->s_out(ToArray(sample.s_out));
+  out->optical_power_known(sample.optical_power_w.has_value());
+  out->optical_power_w(sample.optical_power_w.value_or(0.0));
+  out->lockstep(sample.lockstep);
+}
+
+namespace {
+
+/// `values` (one per control, already checked) into `out` without allocating.
+void ReadControls(const std::vector<double>& values, ControlVector* out) {
+  out->resize(static_cast<Eigen::Index>(values.size()));
+  for (size_t i = 0; i < values.size(); ++i) (*out)[static_cast<Eigen::Index>(i)] = values[i];
+}
+
+void WriteControls(const ControlVector& values, std::vector<double>* out) {
+  out->assign(values.data(), values.data() + values.size());
+}
+
+}  // namespace
+
+std::string ReadCommand(const msg::WaveplateCommand& message, int control_count, ControllerCommand* out) {
+  out->controller_id.assign(message.controller_id().c_str(), message.controller_id().size());
+  out->answers_sample = message.answers_sample();
+  const size_t count = message.phi().size();
+  if (message.controller_id().size() == 0) return "empty controller_id";
   if (count > msg::MAX_CONTROLS) {
     return fmt::format("phi has {} values, more than the {} any device may have (oversized)",
                        count, msg::MAX_CONTROLS);
@@ -136,61 +172,129 @@ std::string CheckCommandShape(const msg::WaveplateCommand& command, int control_
   if (count != static_cast<size_t>(control_count)) {
     return fmt::format("phi has {} values, the device has {} controls", count, control_count);
   }
-  if (std::string reason = CheckFinite(command.phi(), "phi"); !reason.empty()) return reason;
-  return CheckRates(command.phi_rate_per_s(), count);
-}
-
-std::string CheckStateShape(const msg::WaveplateState& state, int control_count) {
-  const size_t controls = static_cast<size_t>(control_count);
-  if (state.phi_applied().size() != controls) {
-    return fmt::format("phi_applied has {} values, the device has {} controls",
-                       state.phi_applied().size(), controls);
-  }
-  if (std::string reason = CheckFinite(state.phi_applied(), "phi_applied"); !reason.empty()) return reason;
-  if (std::string reason = CheckRates(state.phi_rate_per_s(), controls); !reason.empty()) return reason;
-  if (state.mode() != msg::DRIVER_ACTIVE && state.mode() != msg::DRIVER_HOLDING) {
-    return fmt::format("mode {} is not a driver mode", static_cast<int>(state.mode()));
-  }
-  if (!state.phi_rate_per_s().empty()) {
-    if (state.ramp_end_time_ns() < state.ramp_start_time_ns()) {
-      return fmt::format("ramp_end_time_ns {} is before ramp_start_time_ns {}", state.ramp_end_time_ns(),
-                         state.ramp_start_time_ns());
-    }
-    // Overflow-safe: the difference of two arbitrary int64 does not fit an int64.
-    const uint64_t ramp_ns = static_cast<uint64_t>(state.ramp_end_time_ns()) -
-                             static_cast<uint64_t>(state.ramp_start_time_ns());
-    if (ramp_ns > kMaxRampNs) {
-      return fmt::format("the ramp lasts {} ns, longer than any driver ramps ({} ns)", ramp_ns, kMaxRampNs);
-    }
-  }
+  if (std::string reason = CheckFinite(message.phi(), "phi"); !reason.empty()) return reason;
+  if (std::string reason = CheckRates(message.phi_rate_per_s(), count); !reason.empty()) return reason;
+  out->priority = message.priority();
+  out->sequence = message.sequence_number();
+  out->sample_time_ns = message.sample_time_ns();
+  out->sample_publish_time_ns = message.sample_publish_time_ns();
+  out->publish_time_ns = message.publish_time_ns();
+  ReadControls(message.phi(), &out->phi);
+  ReadControls(message.phi_rate_per_s(), &out->rate_per_s);
   return {};
 }
 
-void ReadTrajectory(const msg::WaveplateState& state, AppliedTrajectory* out) {
-  const int n = static_cast<int>(state.phi_applied().size());
-  if (out->phi.size() != n) out->phi.resize(n);
-  if (out->rate_per_s.size() != n) out->rate_per_s.resize(n);
-  bool moving = false;
-  for (int i = 0; i < n; ++i) {
-    out->phi[i] = state.phi_applied()[static_cast<size_t>(i)];
-    const double rate = state.phi_rate_per_s().empty() ? 0.0 : state.phi_rate_per_s()[static_cast<size_t>(i)];
-    out->rate_per_s[i] = rate;
-    moving = moving || rate != 0.0;
-  }
-  out->start_ns = state.ramp_start_time_ns();
-  out->end_ns = state.ramp_end_time_ns();
-  out->moving = moving && out->end_ns > out->start_ns;
+void WriteCommand(const ControllerCommand& command, const std::string& bench_id, msg::WaveplateCommand* out) {
+  out->bench_id(bench_id);
+  out->controller_id(command.controller_id);
+  out->priority(command.priority);
+  out->sequence_number(command.sequence);
+  out->answers_sample(command.answers_sample);
+  out->sample_time_ns(command.sample_time_ns);
+  out->sample_publish_time_ns(command.sample_publish_time_ns);
+  out->publish_time_ns(command.publish_time_ns);
+  WriteControls(command.phi, &out->phi());
+  WriteControls(command.rate_per_s, &out->phi_rate_per_s());
 }
 
-msg::DeviceDescription DescribeDevice(const std::vector<StageConfig>& stages,
-                                      const std::string& bench_id, const std::string& driver_id,
-                                      double max_slew_per_s, double max_ramp_s) {
+std::string ReadState(const msg::WaveplateState& message, int control_count, DriverState* out) {
+  const size_t controls = static_cast<size_t>(control_count);
+  if (message.phi_applied().size() != controls) {
+    return fmt::format("phi_applied has {} values, the device has {} controls",
+                       message.phi_applied().size(), controls);
+  }
+  if (std::string reason = CheckFinite(message.phi_applied(), "phi_applied"); !reason.empty()) return reason;
+  if (std::string reason = CheckRates(message.phi_rate_per_s(), controls); !reason.empty()) return reason;
+  if (message.mode() != msg::DRIVER_ACTIVE && message.mode() != msg::DRIVER_HOLDING) {
+    return fmt::format("mode {} is not a driver mode", static_cast<int>(message.mode()));
+  }
+  if (!message.saturated().empty() && message.saturated().size() != controls) {
+    return fmt::format("saturated has {} values, the device has {} controls", message.saturated().size(),
+                       controls);
+  }
+  const bool rated = !message.phi_rate_per_s().empty();
+  if (rated) {
+    if (message.ramp_end_time_ns() < message.ramp_start_time_ns()) {
+      return fmt::format("ramp_end_time_ns {} is before ramp_start_time_ns {}", message.ramp_end_time_ns(),
+                         message.ramp_start_time_ns());
+    }
+    // Overflow-safe: the difference of two arbitrary int64 does not fit an int64.
+    const uint64_t ramp_ns = static_cast<uint64_t>(message.ramp_end_time_ns()) -
+                             static_cast<uint64_t>(message.ramp_start_time_ns());
+    if (ramp_ns > kMaxStateRampNs) {
+      return fmt::format("the ramp lasts {} ns, longer than any driver ramps ({} ns)", ramp_ns,
+                         kMaxStateRampNs);
+    }
+  }
+  out->sequence = message.sequence_number();
+  out->answers_sample = message.answers_sample();
+  out->sample_time_ns = message.sample_time_ns();
+  out->sample_publish_time_ns = message.sample_publish_time_ns();
+  out->command_receive_time_ns = message.command_receive_time_ns();
+  out->publish_time_ns = message.publish_time_ns();
+  WaveplateMotion& motion = out->motion;
+  ReadControls(message.phi_applied(), &motion.phi);
+  motion.rate_per_s.resize(control_count);
+  bool moving = false;
+  for (size_t i = 0; i < controls; ++i) {
+    const double rate = rated ? message.phi_rate_per_s()[i] : 0.0;
+    motion.rate_per_s[static_cast<Eigen::Index>(i)] = rate;
+    moving = moving || rate != 0.0;
+  }
+  motion.start_ns = message.ramp_start_time_ns();
+  motion.end_ns = rated ? message.ramp_end_time_ns() : message.ramp_start_time_ns();
+  motion.moving = moving && motion.end_ns > motion.start_ns;
+  out->saturated.fill(false);
+  for (size_t i = 0; i < message.saturated().size(); ++i) out->saturated[i] = message.saturated()[i];
+  out->mode = message.mode() == msg::DRIVER_ACTIVE ? DriverMode::kActive : DriverMode::kHolding;
+  out->reason.assign(message.reason().c_str(), message.reason().size());
+  out->obeyed_controller_id.assign(message.obeyed_controller_id().c_str(),
+                                   message.obeyed_controller_id().size());
+  out->obeyed_priority = message.obeyed_priority();
+  out->commands_applied = message.commands_applied();
+  out->commands_rejected = message.commands_rejected();
+  out->commands_limited = message.commands_limited();
+  out->controller_switches = message.controller_switches();
+  out->last_rejection.assign(message.last_rejection().c_str(), message.last_rejection().size());
+  return {};
+}
+
+void WriteState(const DriverState& state, const std::string& bench_id, msg::WaveplateState* out) {
+  out->bench_id(bench_id);
+  out->sequence_number(state.sequence);
+  out->answers_sample(state.answers_sample);
+  out->sample_time_ns(state.sample_time_ns);
+  out->sample_publish_time_ns(state.sample_publish_time_ns);
+  out->command_receive_time_ns(state.command_receive_time_ns);
+  out->publish_time_ns(state.publish_time_ns);
+  const WaveplateMotion& motion = state.motion;
+  WriteControls(motion.phi, &out->phi_applied());
+  if (motion.moving) {
+    WriteControls(motion.rate_per_s, &out->phi_rate_per_s());
+  } else {
+    out->phi_rate_per_s().clear();
+  }
+  out->ramp_start_time_ns(motion.start_ns);
+  out->ramp_end_time_ns(motion.moving ? motion.end_ns : motion.start_ns);
+  out->saturated().assign(state.saturated.begin(), state.saturated.begin() + state.control_count());
+  out->mode(state.mode == DriverMode::kActive ? msg::DRIVER_ACTIVE : msg::DRIVER_HOLDING);
+  out->reason(state.reason.substr(0, 255));
+  out->obeyed_controller_id(state.obeyed_controller_id.substr(0, 63));
+  out->obeyed_priority(state.obeyed_priority);
+  out->commands_applied(state.commands_applied);
+  out->commands_rejected(state.commands_rejected);
+  out->commands_limited(state.commands_limited);
+  out->controller_switches(state.controller_switches);
+  out->last_rejection(state.last_rejection.substr(0, 255));
+}
+
+msg::DeviceDescription DeviceMessage(const DeviceDescription& device, const std::string& bench_id) {
   msg::DeviceDescription out;
   out.bench_id(bench_id);
-  out.driver_id(driver_id);
-  out.max_slew_per_s(max_slew_per_s);
-  out.max_ramp_s(max_ramp_s);
-  for (const StageConfig& stage : stages) {
+  out.driver_id(device.driver_id);
+  out.max_slew_per_s(device.max_slew_per_s);
+  out.max_ramp_s(device.max_ramp_s);
+  for (const StageConfig& stage : device.stages) {
     msg::Stage s;
     s.kind(stage.kind == StageConfig::Kind::kFixedAxis ? msg::STAGE_FIXED_AXIS
                                                       : msg::STAGE_ADJUSTABLE_AXIS);
@@ -205,41 +309,53 @@ msg::DeviceDescription DescribeDevice(const std::vector<StageConfig>& stages,
   return out;
 }
 
-std::vector<StageConfig> StagesFromDescription(const msg::DeviceDescription& description) {
-  std::vector<StageConfig> stages;
-  for (size_t i = 0; i < description.stages().size(); ++i) {
-    const msg::Stage& s = description.stages()[i];
-    const std::string path = fmt::format("device.stages[{}]", i);
-    StageConfig stage;
-    switch (s.kind()) {
-      case msg::STAGE_FIXED_AXIS: stage.kind = StageConfig::Kind::kFixedAxis; break;
-      case msg::STAGE_ADJUSTABLE_AXIS: stage.kind = StageConfig::Kind::kAdjustableAxis; break;
-      default:
-        throw std::invalid_argument(fmt::format("{}.kind: unknown stage kind {}", path,
-                                                static_cast<int>(s.kind())));
+std::string ReadDevice(const msg::DeviceDescription& message, DeviceDescription* out) {
+  try {
+    std::vector<StageConfig> stages;
+    for (size_t i = 0; i < message.stages().size(); ++i) {
+      const msg::Stage& s = message.stages()[i];
+      const std::string path = fmt::format("device.stages[{}]", i);
+      StageConfig stage;
+      switch (s.kind()) {
+        case msg::STAGE_FIXED_AXIS: stage.kind = StageConfig::Kind::kFixedAxis; break;
+        case msg::STAGE_ADJUSTABLE_AXIS: stage.kind = StageConfig::Kind::kAdjustableAxis; break;
+        default:
+          return fmt::format("{}.kind: unknown stage kind {}", path, static_cast<int>(s.kind()));
+      }
+      stage.name = s.name().to_string();
+      stage.axis = Vector3(s.axis()[0], s.axis()[1], s.axis()[2]);
+      stage.map = MapConfig(s.control_map(), path + ".map");
+      stage.range = RangeConfig(s.range());
+      stage.retardance = AngleConfig(s.retardance(), path + ".retardance");
+      stage.orientation = AngleConfig(s.orientation(), path + ".orientation");
+      stages.push_back(std::move(stage));
     }
-    stage.name = s.name().to_string();
-    stage.axis = Vector3(s.axis()[0], s.axis()[1], s.axis()[2]);
-    stage.map = MapConfig(s.control_map(), path + ".map");
-    stage.range = RangeConfig(s.range());
-    stage.retardance = AngleConfig(s.retardance(), path + ".retardance");
-    stage.orientation = AngleConfig(s.orientation(), path + ".orientation");
-    stages.push_back(std::move(stage));
+    ValidateDeviceStages(stages);
+    if (!(std::isfinite(message.max_slew_per_s()) && message.max_slew_per_s() >= 0.0)) {
+      return fmt::format("max_slew_per_s = {} is not a finite rate >= 0", message.max_slew_per_s());
+    }
+    if (!(std::isfinite(message.max_ramp_s()) && message.max_ramp_s() >= 0.0)) {
+      return fmt::format("max_ramp_s = {} is not a finite duration >= 0", message.max_ramp_s());
+    }
+    out->driver_id = message.driver_id().to_string();
+    out->stages = std::move(stages);
+    out->max_slew_per_s = message.max_slew_per_s();
+    out->max_ramp_s = message.max_ramp_s();
+    return {};
+  } catch (const std::invalid_argument& e) {  // ScenarioError names the field
+    return e.what();
   }
-  ValidateDeviceStages(stages);
-  return stages;
 }
 
-msg::Target TargetMessage(const TargetConfig& target, const std::string& bench_id,
-                          uint64_t revision, const std::string& request_id) {
+msg::Target TargetMessage(const BenchTarget& target, const std::string& bench_id) {
   msg::Target out;
   out.bench_id(bench_id);
-  out.revision(revision);
-  out.request_id(request_id);
-  out.kind(target.kind == TargetConfig::Kind::kPoint ? msg::TARGET_POINT : msg::TARGET_SET);
-  out.point(ToArray(target.point));
-  out.normal(ToArray(target.normal));
-  out.offset(target.offset);
+  out.revision(target.revision);
+  out.request_id(target.request_id);
+  out.kind(target.target.kind == TargetConfig::Kind::kPoint ? msg::TARGET_POINT : msg::TARGET_SET);
+  out.point(ToArray(target.target.point));
+  out.normal(ToArray(target.target.normal));
+  out.offset(target.target.offset);
   return out;
 }
 
@@ -264,7 +380,41 @@ TargetConfig TargetConfigOf(const Message& message) {
 
 }  // namespace
 
-TargetConfig TargetFromMessage(const msg::Target& message) { return TargetConfigOf(message); }
+std::string ReadTarget(const msg::Target& message, BenchTarget* out) {
+  try {
+    out->target = TargetConfigOf(message);
+    out->revision = message.revision();
+    out->request_id = message.request_id().to_string();
+    return {};
+  } catch (const std::invalid_argument& e) {  // ScenarioError names the field
+    return e.what();
+  }
+}
+
 TargetConfig TargetFromRequest(const msg::TargetRequest& request) { return TargetConfigOf(request); }
+
+msg::ControllerStatus StatusMessage(const ControllerStatusReport& status, const std::string& bench_id) {
+  msg::ControllerStatus out;
+  out.bench_id(bench_id);
+  out.controller_id(status.controller_id.substr(0, 63));
+  out.priority(status.priority);
+  out.law(status.law.substr(0, 31));
+  out.obeyed(status.obeyed);
+  out.condition(status.condition.substr(0, 127));
+  out.answers_sample(status.answers_sample);
+  out.error_deg(status.error_deg);
+  out.sigma_max(status.sigma_max);
+  out.sigma_min(status.sigma_min);
+  out.nullspace_active_fraction(status.nullspace_active_fraction);
+  out.compute_time_mean_s(status.compute_time_mean_s);
+  out.compute_time_max_s(status.compute_time_max_s);
+  out.updates(status.updates);
+  out.failed_updates(status.failed_updates);
+  out.rejected_samples(status.rejected_samples);
+  out.missed_deadlines(status.missed_deadlines);
+  out.last_rejection(status.last_rejection.substr(0, 255));
+  out.publish_time_ns(status.publish_time_ns);
+  return out;
+}
 
 }  // namespace dpc::bus

@@ -17,61 +17,134 @@ TEST(CheckUnitStokes, AcceptsUnitRefusesNonUnitAndNonFinite) {
   EXPECT_NE(CheckUnitStokes({INFINITY, 0.0, 0.0}, "s_in").find("not finite"), std::string::npos);
 }
 
-TEST(CheckCommandShape, NamesTheProblem) {
-  msg::WaveplateCommand c;
-  c.controller_id("A");
-  c.phi({0.1, 0.2, 0.3});
-  EXPECT_EQ(CheckCommandShape(c, 3), "");
-  EXPECT_NE(CheckCommandShape(c, 4).find("the device has 4 controls"), std::string::npos);
-  c.phi(std::vector<double>(17, 0.0));
-  EXPECT_NE(CheckCommandShape(c, 3).find("oversized"), std::string::npos);
-  c.phi({0.1, NAN, 0.3});
-  EXPECT_NE(CheckCommandShape(c, 3).find("phi[1]"), std::string::npos);
-  c.phi({0.1, 0.2, 0.3});
-  c.controller_id("");
-  EXPECT_NE(CheckCommandShape(c, 3).find("controller_id"), std::string::npos);
-  c.controller_id("A");
-  c.phi_rate_per_s({1.0, 2.0, 3.0});
-  EXPECT_EQ(CheckCommandShape(c, 3), "");
-  c.phi_rate_per_s({1.0, 2.0});
-  EXPECT_NE(CheckCommandShape(c, 3).find("phi_rate_per_s has 2 values"), std::string::npos);
-  c.phi_rate_per_s({1.0, INFINITY, 3.0});
-  EXPECT_NE(CheckCommandShape(c, 3).find("phi_rate_per_s[1]"), std::string::npos);
+TEST(ReadSample, ReadsAUsableSampleAndNamesWhatIsWrongWithAnother) {
+  BenchSample sample;
+  sample.sequence = 7;
+  sample.time_ns = 1'000;
+  sample.publish_time_ns = 2'000;
+  sample.s_in = StokesVector(0.0, 0.6, 0.8);
+  sample.s_out = StokesVector(1.0, 0.0, 0.0);
+  sample.optical_power_w = 1e-3;
+  sample.lockstep = true;
+  msg::StokesSample m;
+  WriteSample(sample, "b", &m);
+  EXPECT_EQ(m.bench_id().to_string(), "b");
+  BenchSample back;
+  ASSERT_EQ(ReadSample(m, &back), "");
+  EXPECT_EQ(back.sequence, 7u);
+  EXPECT_EQ(back.time_ns, 1'000);
+  EXPECT_EQ(back.publish_time_ns, 2'000);
+  EXPECT_EQ(back.s_in, sample.s_in);
+  EXPECT_EQ(back.s_out, sample.s_out);
+  EXPECT_EQ(back.optical_power_w, 1e-3);
+  EXPECT_TRUE(back.lockstep);
+  m.s_in({1.0, 1.0, 0.0});
+  EXPECT_NE(ReadSample(m, &back).find("s_in"), std::string::npos);
+  m.s_in({0.0, 0.6, 0.8});
+  m.s_out({NAN, 0.0, 0.0});
+  EXPECT_NE(ReadSample(m, &back).find("s_out"), std::string::npos);
+  m.s_out({1.0, 0.0, 0.0});
+  m.optical_power_w(-1.0);
+  EXPECT_NE(ReadSample(m, &back).find("optical_power_w"), std::string::npos);
+  m.optical_power_known(false);
+  m.sequence_number(0);
+  EXPECT_NE(ReadSample(m, &back).find("sequence_number 0"), std::string::npos);
 }
 
-TEST(CheckStateShape, NamesTheProblem) {
+TEST(ReadCommand, ReadsAUsableCommandAndNamesWhatIsWrongWithAnother) {
+  msg::WaveplateCommand c;
+  c.controller_id("A");
+  c.answers_sample(9);
+  c.phi({0.1, 0.2, 0.3});
+  ControllerCommand read;
+  EXPECT_EQ(ReadCommand(c, 3, &read), "");
+  EXPECT_EQ(read.phi, (ControlVector(3) << 0.1, 0.2, 0.3).finished());
+  EXPECT_EQ(read.rate_per_s.size(), 0);
+  EXPECT_NE(ReadCommand(c, 4, &read).find("the device has 4 controls"), std::string::npos);
+  c.phi(std::vector<double>(17, 0.0));
+  EXPECT_NE(ReadCommand(c, 3, &read).find("oversized"), std::string::npos);
+  EXPECT_EQ(read.controller_id, "A") << "read even when refused, for the report";
+  EXPECT_EQ(read.answers_sample, 9u);
+  c.phi({0.1, NAN, 0.3});
+  EXPECT_NE(ReadCommand(c, 3, &read).find("phi[1]"), std::string::npos);
+  c.phi({0.1, 0.2, 0.3});
+  c.controller_id("");
+  EXPECT_NE(ReadCommand(c, 3, &read).find("controller_id"), std::string::npos);
+  c.controller_id("A");
+  c.phi_rate_per_s({1.0, 2.0, 3.0});
+  EXPECT_EQ(ReadCommand(c, 3, &read), "");
+  EXPECT_EQ(read.rate_per_s, (ControlVector(3) << 1.0, 2.0, 3.0).finished());
+  c.phi_rate_per_s({1.0, 2.0});
+  EXPECT_NE(ReadCommand(c, 3, &read).find("phi_rate_per_s has 2 values"), std::string::npos);
+  c.phi_rate_per_s({1.0, INFINITY, 3.0});
+  EXPECT_NE(ReadCommand(c, 3, &read).find("phi_rate_per_s[1]"), std::string::npos);
+}
+
+TEST(WriteCommand, RoundTripsEveryField) {
+  ControllerCommand command;
+  command.controller_id = "main";
+  command.priority = -3;
+  command.sequence = 11;
+  command.answers_sample = 12;
+  command.sample_time_ns = 13;
+  command.sample_publish_time_ns = 14;
+  command.publish_time_ns = 15;
+  command.phi = (ControlVector(2) << 0.5, -0.5).finished();
+  command.rate_per_s = (ControlVector(2) << 3.0, 4.0).finished();
+  msg::WaveplateCommand m;
+  WriteCommand(command, "b", &m);
+  EXPECT_EQ(m.bench_id().to_string(), "b");
+  ControllerCommand back;
+  ASSERT_EQ(ReadCommand(m, 2, &back), "");
+  EXPECT_EQ(back.controller_id, "main");
+  EXPECT_EQ(back.priority, -3);
+  EXPECT_EQ(back.sequence, 11u);
+  EXPECT_EQ(back.answers_sample, 12u);
+  EXPECT_EQ(back.sample_time_ns, 13);
+  EXPECT_EQ(back.sample_publish_time_ns, 14);
+  EXPECT_EQ(back.publish_time_ns, 15);
+  EXPECT_EQ(back.phi, command.phi);
+  EXPECT_EQ(back.rate_per_s, command.rate_per_s);
+}
+
+TEST(ReadState, NamesTheProblem) {
   msg::WaveplateState s;
+  DriverState read;
   s.phi_applied({0.1, 0.2, 0.3});
-  EXPECT_EQ(CheckStateShape(s, 3), "");
-  EXPECT_NE(CheckStateShape(s, 2).find("phi_applied has 3 values"), std::string::npos);
+  EXPECT_EQ(ReadState(s, 3, &read), "");
+  EXPECT_NE(ReadState(s, 2, &read).find("phi_applied has 3 values"), std::string::npos);
   s.phi_applied({0.1, NAN, 0.3});
-  EXPECT_NE(CheckStateShape(s, 3).find("phi_applied[1]"), std::string::npos);
+  EXPECT_NE(ReadState(s, 3, &read).find("phi_applied[1]"), std::string::npos);
   s.phi_applied({0.1, 0.2, 0.3});
   s.phi_rate_per_s({1.0});
-  EXPECT_NE(CheckStateShape(s, 3).find("phi_rate_per_s has 1 values"), std::string::npos);
+  EXPECT_NE(ReadState(s, 3, &read).find("phi_rate_per_s has 1 values"), std::string::npos);
   s.phi_rate_per_s({1.0, 0.0, NAN});
-  EXPECT_NE(CheckStateShape(s, 3).find("phi_rate_per_s[2]"), std::string::npos);
+  EXPECT_NE(ReadState(s, 3, &read).find("phi_rate_per_s[2]"), std::string::npos);
   s.phi_rate_per_s({1.0, 0.0, -2.0});
   s.ramp_start_time_ns(5'000'000);
   s.ramp_end_time_ns(4'000'000);
-  EXPECT_NE(CheckStateShape(s, 3).find("ramp_end_time_ns"), std::string::npos);
+  EXPECT_NE(ReadState(s, 3, &read).find("ramp_end_time_ns"), std::string::npos);
   // A ramp across the whole int64 range would overflow t − start in every reader.
   s.ramp_start_time_ns(std::numeric_limits<int64_t>::min());
   s.ramp_end_time_ns(std::numeric_limits<int64_t>::max());
-  EXPECT_NE(CheckStateShape(s, 3).find("longer than any driver ramps"), std::string::npos);
+  EXPECT_NE(ReadState(s, 3, &read).find("longer than any driver ramps"), std::string::npos);
   s.ramp_start_time_ns(0);
   s.ramp_end_time_ns(1'000'000'000);
-  EXPECT_EQ(CheckStateShape(s, 3), "");
+  EXPECT_EQ(ReadState(s, 3, &read), "");
+  s.saturated({true, false});
+  EXPECT_NE(ReadState(s, 3, &read).find("saturated has 2 values"), std::string::npos);
+  s.saturated({});
   // Enumerations are range-checked: a mode no driver sends is refused.
   s.mode(static_cast<msg::DriverMode>(7));
-  EXPECT_NE(CheckStateShape(s, 3).find("mode 7"), std::string::npos);
+  EXPECT_NE(ReadState(s, 3, &read).find("mode 7"), std::string::npos);
 }
 
-TEST(AppliedTrajectory, MovesBetweenItsStartAndEndOnly) {
+TEST(ReadState, TheMotionMovesBetweenItsStartAndEndOnly) {
   msg::WaveplateState s;
   s.phi_applied({0.1, 0.2, 0.3});
-  AppliedTrajectory motion;
-  ReadTrajectory(s, &motion);  // no rate: φ holds
+  DriverState state;
+  ASSERT_EQ(ReadState(s, 3, &state), "");  // no rate: φ holds
+  const WaveplateMotion& motion = state.motion;
   EXPECT_FALSE(motion.moving);
   ControlVector phi;
   motion.At(123'456'789, &phi);
@@ -79,7 +152,7 @@ TEST(AppliedTrajectory, MovesBetweenItsStartAndEndOnly) {
   s.phi_rate_per_s({1.0, 0.0, -2.0});
   s.ramp_start_time_ns(1'000'000);
   s.ramp_end_time_ns(3'000'000);
-  ReadTrajectory(s, &motion);
+  ASSERT_EQ(ReadState(s, 3, &state), "");
   EXPECT_TRUE(motion.moving);
   motion.At(0, &phi);
   EXPECT_NEAR(phi[0], 0.1, 1e-15);
@@ -91,8 +164,59 @@ TEST(AppliedTrajectory, MovesBetweenItsStartAndEndOnly) {
   EXPECT_NEAR(phi[2], 0.296, 1e-15);
   // An empty interval does not move, whatever the rate.
   s.ramp_end_time_ns(1'000'000);
-  ReadTrajectory(s, &motion);
+  ASSERT_EQ(ReadState(s, 3, &state), "");
   EXPECT_FALSE(motion.moving);
+}
+
+TEST(WriteState, RoundTripsEveryField) {
+  DriverState state;
+  state.sequence = 1;
+  state.answers_sample = 2;
+  state.sample_time_ns = 3;
+  state.sample_publish_time_ns = 4;
+  state.command_receive_time_ns = 5;
+  state.publish_time_ns = 6;
+  state.motion = WaveplateMotion::Still((ControlVector(2) << 0.1, 0.2).finished());
+  state.motion.rate_per_s = (ControlVector(2) << 1.0, -1.0).finished();
+  state.motion.start_ns = 100;
+  state.motion.end_ns = 200;
+  state.motion.moving = true;
+  state.saturated[1] = true;
+  state.mode = DriverMode::kActive;
+  state.reason = "obeying main";
+  state.obeyed_controller_id = "main";
+  state.obeyed_priority = 4;
+  state.commands_applied = 7;
+  state.commands_rejected = 8;
+  state.commands_limited = 9;
+  state.controller_switches = 10;
+  state.last_rejection = "from x: y";
+  msg::WaveplateState m;
+  WriteState(state, "b", &m);
+  EXPECT_EQ(m.saturated(), std::vector<bool>({false, true}));
+  DriverState back;
+  ASSERT_EQ(ReadState(m, 2, &back), "");
+  EXPECT_EQ(back.sequence, 1u);
+  EXPECT_EQ(back.answers_sample, 2u);
+  EXPECT_EQ(back.sample_time_ns, 3);
+  EXPECT_EQ(back.sample_publish_time_ns, 4);
+  EXPECT_EQ(back.command_receive_time_ns, 5);
+  EXPECT_EQ(back.publish_time_ns, 6);
+  EXPECT_EQ(back.motion.phi, state.motion.phi);
+  EXPECT_EQ(back.motion.rate_per_s, state.motion.rate_per_s);
+  EXPECT_EQ(back.motion.start_ns, 100);
+  EXPECT_EQ(back.motion.end_ns, 200);
+  EXPECT_TRUE(back.motion.moving);
+  EXPECT_TRUE(back.any_saturated());
+  EXPECT_EQ(back.mode, DriverMode::kActive);
+  EXPECT_EQ(back.reason, "obeying main");
+  EXPECT_EQ(back.obeyed_controller_id, "main");
+  EXPECT_EQ(back.obeyed_priority, 4);
+  EXPECT_EQ(back.commands_applied, 7u);
+  EXPECT_EQ(back.commands_rejected, 8u);
+  EXPECT_EQ(back.commands_limited, 9u);
+  EXPECT_EQ(back.controller_switches, 10u);
+  EXPECT_EQ(back.last_rejection, "from x: y");
 }
 
 TEST(DeviceDescription, RoundTripsEveryStageKindMapAndRange) {
@@ -107,7 +231,12 @@ TEST(DeviceDescription, RoundTripsEveryStageKindMapAndRange) {
   adjustable.orientation.controlled = true;
   adjustable.orientation.range = ControlRange{-2.0, 2.0};
   stages.push_back(adjustable);
-  const std::vector<StageConfig> back = StagesFromDescription(DescribeDevice(stages, "b", "d", 0.5));
+  DeviceDescription read;
+  ASSERT_EQ(ReadDevice(DeviceMessage(DeviceDescription{"d", stages, 0.5, 2e-3}, "b"), &read), "");
+  EXPECT_EQ(read.driver_id, "d");
+  EXPECT_EQ(read.max_slew_per_s, 0.5);
+  EXPECT_EQ(read.max_ramp_s, 2e-3);
+  const std::vector<StageConfig>& back = read.stages;
   ASSERT_EQ(back.size(), stages.size());
   EXPECT_EQ(back[0].range->min, -1.0);
   EXPECT_EQ(back[1].map.kind, ControlMapConfig::Kind::kPolynomial);
@@ -120,17 +249,22 @@ TEST(DeviceDescription, RoundTripsEveryStageKindMapAndRange) {
 }
 
 TEST(DeviceDescription, ABadDescriptionIsRefusedWithTheFieldPath) {
-  msg::DeviceDescription d = DescribeDevice(StagesFromAxes("131"), "b", "d", 0.0);
+  DeviceDescription read;
+  msg::DeviceDescription d = DeviceMessage(DeviceDescription{"d", StagesFromAxes("131"), 0.0, 0.0}, "b");
   d.stages()[1].control_map().rad_per_unit(0.0);
-  try {
-    StagesFromDescription(d);
-    FAIL() << "accepted a zero map";
-  } catch (const ScenarioError& e) {
-    EXPECT_NE(std::string(e.what()).find("stages[1]"), std::string::npos) << e.what();
-  }
-  d = DescribeDevice(StagesFromAxes("131"), "b", "d", 0.0);
+  EXPECT_NE(ReadDevice(d, &read).find("stages[1]"), std::string::npos) << ReadDevice(d, &read);
+  d = DeviceMessage(DeviceDescription{"d", StagesFromAxes("131"), 0.0, 0.0}, "b");
+  d.stages()[2].kind(static_cast<msg::StageKind>(9));
+  EXPECT_NE(ReadDevice(d, &read).find("device.stages[2].kind: unknown stage kind 9"), std::string::npos);
+  d = DeviceMessage(DeviceDescription{"d", StagesFromAxes("131"), 0.0, 0.0}, "b");
+  d.stages()[0].control_map().kind(static_cast<msg::ControlMapKind>(5));
+  EXPECT_NE(ReadDevice(d, &read).find("unknown control map kind 5"), std::string::npos);
+  d = DeviceMessage(DeviceDescription{"d", StagesFromAxes("131"), 0.0, 0.0}, "b");
+  d.max_ramp_s(NAN);
+  EXPECT_NE(ReadDevice(d, &read).find("max_ramp_s"), std::string::npos);
+  d.max_ramp_s(0.0);
   d.stages().clear();
-  EXPECT_THROW(StagesFromDescription(d), ScenarioError);
+  EXPECT_NE(ReadDevice(d, &read), "");
 }
 
 TEST(TargetMessages, RoundTripAndValidation) {
@@ -138,16 +272,45 @@ TEST(TargetMessages, RoundTripAndValidation) {
   set.kind = TargetConfig::Kind::kSet;
   set.normal = Vector3(0, 0, 2);
   set.offset = 0.5;
-  const TargetConfig back = TargetFromMessage(TargetMessage(set, "b", 3, "r1"));
+  BenchTarget read;
+  ASSERT_EQ(ReadTarget(TargetMessage(BenchTarget{3, "r1", set}, "b"), &read), "");
+  EXPECT_EQ(read.revision, 3u);
+  EXPECT_EQ(read.request_id, "r1");
+  const TargetConfig& back = read.target;
   EXPECT_EQ(back.kind, TargetConfig::Kind::kSet);
   EXPECT_EQ(back.normal, set.normal);
   EXPECT_EQ(back.offset, 0.5);
+  msg::Target bad = TargetMessage(BenchTarget{4, "", set}, "b");
+  bad.kind(static_cast<msg::TargetKind>(2));
+  EXPECT_NE(ReadTarget(bad, &read).find("unknown target kind 2"), std::string::npos);
+  bad.kind(msg::TARGET_POINT);
+  bad.point({0.0, 0.0, 2.0});
+  EXPECT_NE(ReadTarget(bad, &read).find("target.point"), std::string::npos);
+  EXPECT_EQ(read.revision, 3u) << "a refused target leaves what was read before";
   msg::TargetRequest request;
   request.kind(msg::TARGET_POINT);
   request.point({1.0, 1.0, 0.0});
   EXPECT_THROW(TargetFromRequest(request), ScenarioError);
   request.point({0.0, 0.0, 1.0});
   EXPECT_EQ(TargetFromRequest(request).point, StokesVector(0, 0, 1));
+}
+
+TEST(StatusMessage, CarriesEveryFieldCutToTheWireBounds) {
+  ControllerStatusReport status;
+  status.controller_id = "main";
+  status.law = "gp";
+  status.obeyed = true;
+  status.condition = std::string(300, 'c');
+  status.error_deg = 1.5;
+  status.updates = 42;
+  const msg::ControllerStatus m = StatusMessage(status, "b");
+  EXPECT_EQ(m.bench_id().to_string(), "b");
+  EXPECT_EQ(m.controller_id().to_string(), "main");
+  EXPECT_EQ(m.law().to_string(), "gp");
+  EXPECT_TRUE(m.obeyed());
+  EXPECT_EQ(m.condition().size(), 127u);
+  EXPECT_EQ(m.error_deg(), 1.5);
+  EXPECT_EQ(m.updates(), 42u);
 }
 
 }  // namespace

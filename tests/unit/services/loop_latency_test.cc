@@ -3,17 +3,19 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 namespace dpc::services {
 namespace {
 
 constexpr int64_t kOrigin = 1'700'000'000'000'000'000;
 
-msg::WaveplateState State(uint64_t answers, int64_t to_driver_ns, int64_t to_published_ns) {
-  msg::WaveplateState state;
-  state.answers_sample(answers);
-  state.sample_publish_time_ns(kOrigin);
-  state.command_receive_time_ns(kOrigin + to_driver_ns);
-  state.publish_time_ns(kOrigin + to_published_ns);
+DriverState State(uint64_t answers, int64_t to_driver_ns, int64_t to_published_ns) {
+  DriverState state;
+  state.answers_sample = answers;
+  state.sample_publish_time_ns = kOrigin;
+  state.command_receive_time_ns = kOrigin + to_driver_ns;
+  state.publish_time_ns = kOrigin + to_published_ns;
   return state;
 }
 
@@ -34,7 +36,7 @@ TEST(LoopLatencyRecorder, IgnoresRepeatedAndOlderAnswersAndHeartbeatsWithoutASam
   recorder.OnState(State(5, 100'000, 110'000), kOrigin + 150'000);
   recorder.OnState(State(5, 100'000, 110'000), kOrigin + 900'000);   // a hold notice repeats it
   recorder.OnState(State(4, 100'000, 110'000), kOrigin + 900'000);   // late, reordered
-  msg::WaveplateState heartbeat;                                      // before any command
+  DriverState heartbeat;                                      // before any command
   recorder.OnState(heartbeat, kOrigin);
   EXPECT_EQ(recorder.to_state_received_us().count(), 1);
   EXPECT_DOUBLE_EQ(recorder.to_state_received_us().max(), 150.0);
@@ -44,8 +46,8 @@ TEST(LoopLatencyRecorder, IgnoresAnswersToSamplesFromBeforeItStarted) {
   // A restarted bench numbers its samples from 1 again; the driver's heartbeat still repeats
   // the previous run's last command (sample 3000, published before this run).
   LoopLatencyRecorder recorder(kOrigin);
-  msg::WaveplateState previous_run = State(3000, 100'000, 110'000);
-  previous_run.sample_publish_time_ns(kOrigin - 400'000'000);
+  DriverState previous_run = State(3000, 100'000, 110'000);
+  previous_run.sample_publish_time_ns = kOrigin - 400'000'000;
   recorder.OnState(previous_run, kOrigin + 1'000);
   recorder.OnState(State(1, 100'000, 110'000), kOrigin + 150'000);
   recorder.OnState(State(2, 100'000, 110'000), kOrigin + 150'000);
@@ -58,11 +60,14 @@ TEST(LoopLatencyRecorder, SkipsAndCountsSpansThatCannotBeLatencies) {
   LoopLatencyRecorder recorder;
   recorder.OnState(State(1, -5'000, 110'000), kOrigin + 150'000);         // another host's clock
   recorder.OnState(State(2, 100'000, 110'000), kOrigin + 20'000'000'000);  // 20 s: a stale state
-  EXPECT_EQ(recorder.implausible(), 2u);
+  DriverState forged = State(3, 0, 0);
+  forged.command_receive_time_ns = std::numeric_limits<int64_t>::min();   // overflows a difference
+  recorder.OnState(forged, kOrigin);
+  EXPECT_EQ(recorder.implausible(), 3u);
   EXPECT_EQ(recorder.to_driver_us().count(), 0);
   const auto json = recorder.Json();
   EXPECT_TRUE(json["sample_to_command_at_driver"]["p50"].is_null());
-  EXPECT_EQ(json["implausible"].get<uint64_t>(), 2u);
+  EXPECT_EQ(json["implausible"].get<uint64_t>(), 3u);
 }
 
 TEST(LoopLatencyRecorder, PercentilesFollowTheDistribution) {

@@ -1,5 +1,6 @@
 #pragma once
-// Wall-clock and monotonic readings in nanoseconds, as carried on the bus (*_time_ns fields).
+// Wall-clock and monotonic readings in nanoseconds, as the bench's messages carry them
+// (*_time_ns fields), and an absolute sleep for paced loops.
 
 #include <time.h>
 
@@ -7,7 +8,7 @@
 #include <chrono>
 #include <cstdint>
 
-namespace dpc::bus {
+namespace dpc {
 
 /// CLOCK_REALTIME: comparable across the processes of one host (loop latency).
 inline int64_t WallClockNs() {
@@ -31,4 +32,4 @@ inline void SleepUntilMonotonicNs(int64_t monotonic_ns) {
   }
 }
 
-}  // namespace dpc::bus
+}  // namespace dpc
