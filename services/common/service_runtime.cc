@@ -7,7 +7,7 @@
 #include <spdlog/spdlog.h>
 
 #include "dpc/scenario_io/scenario_text.h"
-#include "scenario_loading.h"
+#include "dpc/cli/scenario_loading.h"
 
 namespace dpc::services {
 
@@ -33,16 +33,15 @@ void AddCommonOptions(CLI::App& app, CommonOptions* options) {
 }
 
 ScenarioConfig LoadServiceScenario(const CommonOptions& options) {
-  ScenarioConfig scenario =
+  return cli::LoadScenarioWithOverrides(
+      options.scenario_file, options.overrides,
       options.scenario_file.empty()
           ? ScenarioFromProto(ParseScenarioText(DefaultBenchScenarioText(), "<bench_default.pbtxt>"))
-          : ReadScenarioFile(options.scenario_file);
-  options.overrides.Apply(&scenario);
-  return scenario;
+          : ScenarioConfig{});
 }
 
 std::string DescribeError(const ScenarioError& error, const CommonOptions& options) {
-  return tools::DescribeScenarioError(error, options.overrides);
+  return cli::DescribeScenarioError(error, options.overrides);
 }
 
 void SetUpLogging(const std::string& service, const CommonOptions& options) {

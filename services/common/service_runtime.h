@@ -11,20 +11,17 @@
 
 #include "dpc/config/scenario_config.h"
 #include "dpc/config/scenario_error.h"
-#include "scenario_overrides.h"
+#include "dpc/cli/exit_code.h"
+#include "dpc/cli/scenario_overrides.h"
 
 namespace dpc::services {
-
-inline constexpr int kExitOk = 0;
-inline constexpr int kExitRuntimeError = 1;
-inline constexpr int kExitInvalidInput = 2;
 
 struct CommonOptions {
   int domain_id = 0;
   std::string bench_id = "bench1";
   std::string scenario_file;   ///< empty: the embedded default (deploy/scenarios/bench_default.pbtxt)
   std::string log_level = "info";
-  tools::ScenarioOverrides overrides;   ///< the `dpc sim` flags (--method, --step, --rate-rad-per-s, …)
+  cli::ScenarioOverrides overrides;   ///< the `dpc sim` flags (--method, --step, --rate-rad-per-s, …)
 };
 
 /// Adds --domain, --bench-id, the positional SCENARIO, --log-level and the scenario override

@@ -59,7 +59,7 @@ int Run(int argc, char** argv) {
     settings.simulation = scenario.simulation;
   } catch (const ScenarioError& e) {
     spdlog::error("{}", DescribeError(e, common));
-    return kExitInvalidInput;
+    return cli::ToInt(cli::ExitCode::kInvalidInput);
   }
 
   try {
@@ -146,9 +146,9 @@ int Run(int argc, char** argv) {
     spdlog::info("stopping on signal {}", signals.signal());
   } catch (const bus::BusError& e) {
     spdlog::error("{}", e.what());
-    return kExitRuntimeError;
+    return cli::ToInt(cli::ExitCode::kRuntimeError);
   }
-  return kExitOk;
+  return cli::ToInt(cli::ExitCode::kOk);
 }
 
 }  // namespace

@@ -75,7 +75,7 @@ int Run(int argc, char** argv) {
     BuildChain(scenario.stages).ClampToRanges(&initial_phi);
   } catch (const ScenarioError& e) {
     spdlog::error("invalid scenario: {}", e.what());
-    return kExitInvalidInput;
+    return cli::ToInt(cli::ExitCode::kInvalidInput);
   }
 
   try {
@@ -188,9 +188,9 @@ int Run(int argc, char** argv) {
     spdlog::info("stopping on signal {}", signals.signal());
   } catch (const std::exception& e) {  // bus::BusError, or a backend the driver cannot use
     spdlog::error("{}", e.what());
-    return kExitRuntimeError;
+    return cli::ToInt(cli::ExitCode::kRuntimeError);
   }
-  return kExitOk;
+  return cli::ToInt(cli::ExitCode::kOk);
 }
 
 }  // namespace

@@ -79,6 +79,7 @@ class BenchCore {
 
   const ScenarioConfig& scenario() const { return scenario_; }
   const WaveplateChain& chain() const { return *chain_; }
+  const Target& target() const { return *target_; }
   int control_count() const { return chain_->control_count(); }
 
  private:

@@ -16,7 +16,7 @@
 #include "dpc/bench/clock.h"
 #include "dpc/config/scenario_error.h"
 #include "dpc/sim/trace_writer.h"
-#include "json_report.h"
+#include "dpc/cli/run_report.h"
 #include "loop_latency.h"
 #include "service_runtime.h"
 
@@ -214,7 +214,7 @@ int Run(int argc, char** argv) {
     bench = std::make_unique<BenchCore>(LoadServiceScenario(common), settings);
   } catch (const ScenarioError& e) {
     spdlog::error("{}", DescribeError(e, common));
-    return kExitInvalidInput;
+    return cli::ToInt(cli::ExitCode::kInvalidInput);
   }
 
   try {
@@ -251,8 +251,8 @@ int Run(int argc, char** argv) {
                    loop["p999"].get<double>());
     }
     if (json) {
-      ClosedLoopSimulator settings_view(bench->scenario());
-      nlohmann::ordered_json out = tools::RunReportJson(settings_view, report.result, {});
+      nlohmann::ordered_json out = cli::RunReportJson(
+          cli::DescribeRun(bench->scenario(), bench->chain(), bench->target(), "bench"), report.result, {});
       out["bench"] = {{"mode", settings.lockstep ? "lockstep" : "realtime"},
                       {"published", report.published},
                       {"overruns", report.overruns},
@@ -267,16 +267,16 @@ int Run(int argc, char** argv) {
                         report.stop_reason != "stopped" && report.stop_reason != "stopped by signal";
     if (failed) {
       spdlog::error("{}", report.stop_reason);
-      return kExitRuntimeError;
+      return cli::ToInt(cli::ExitCode::kRuntimeError);
     }
   } catch (const bus::BusError& e) {
     spdlog::error("{}", e.what());
-    return kExitRuntimeError;
+    return cli::ToInt(cli::ExitCode::kRuntimeError);
   } catch (const std::runtime_error& e) {
     spdlog::error("{}", e.what());
-    return kExitRuntimeError;
+    return cli::ToInt(cli::ExitCode::kRuntimeError);
   }
-  return kExitOk;
+  return cli::ToInt(cli::ExitCode::kOk);
 }
 
 }  // namespace

@@ -13,9 +13,6 @@
 
 namespace dpc::tools {
 
-/// Exit code of `dpc topic echo` / `hz` when nothing arrived before --timeout-s.
-inline constexpr int kExitNoData = 3;
-
 struct BusToolOptions {
   int domain_id = 0;
   std::string bench_id = "bench1";

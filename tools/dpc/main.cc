@@ -10,7 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
-#include "exit_codes.h"
+#include "dpc/cli/exit_code.h"
 #include "monitor_command.h"
 #include "plot_command.h"
 #include "sim_command.h"
@@ -20,6 +20,8 @@
 
 int main(int argc, char** argv) {
   using namespace dpc::tools;
+  using dpc::cli::ExitCode;
+  using dpc::cli::ToInt;
   CLI::App app{
       "dpc: Jacobian-based dynamic polarization control (Wang et al.), simulator and tools"};
   app.require_subcommand(1);
@@ -38,14 +40,13 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);
-    return code == 0 ? kExitOk : kExitInvalidInput;
+    return ToInt(app.exit(e) == 0 ? ExitCode::kOk : ExitCode::kInvalidInput);
   }
-  if (*sim) return RunSimCommand(sim_options);
-  if (*sweep) return RunSweepCommand(sweep_options);
-  if (*plot) return RunPlotCommand(plot_options);
-  if (*topic) return RunTopicCommand(topic_options);
-  if (*target) return RunTargetCommand(target_options);
-  if (*monitor) return RunMonitorCommand(monitor_options);
-  return kExitInvalidInput;
+  if (*sim) return ToInt(RunSimCommand(sim_options));
+  if (*sweep) return ToInt(RunSweepCommand(sweep_options));
+  if (*plot) return ToInt(RunPlotCommand(plot_options));
+  if (*topic) return ToInt(RunTopicCommand(topic_options));
+  if (*target) return ToInt(RunTargetCommand(target_options));
+  if (*monitor) return ToInt(RunMonitorCommand(monitor_options));
+  return ToInt(ExitCode::kInvalidInput);
 }

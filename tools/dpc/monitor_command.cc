@@ -12,7 +12,7 @@
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/message_conversion.h"
 #include "dpc/config/scenario_builders.h"
-#include "exit_codes.h"
+#include "dpc/cli/exit_code.h"
 
 namespace dpc::tools {
 namespace {
@@ -121,11 +121,11 @@ CLI::App* AddMonitorCommand(CLI::App& app, MonitorOptions* o) {
   return monitor;
 }
 
-int RunMonitorCommand(const MonitorOptions& o) {
+cli::ExitCode RunMonitorCommand(const MonitorOptions& o) {
   if (o.bus.bench_id.empty() || o.bus.bench_id == "*") {
     fmt::print(stderr, "dpc monitor: --bench-id: give one bench (\"{}\" would mix benches)\n",
                o.bus.bench_id);
-    return kExitInvalidInput;
+    return cli::ExitCode::kInvalidInput;
   }
   StopSignals signals;
   const bool redraw = !o.lines && isatty(STDOUT_FILENO) == 1;
@@ -187,10 +187,10 @@ int RunMonitorCommand(const MonitorOptions& o) {
     std::fflush(stdout);
     // Readers go before the participant (reverse declaration order); say why we stop.
     if (StopSignals::requested()) fmt::print(stderr, "dpc monitor: stopped by signal\n");
-    return output_ok ? kExitOk : kExitRuntimeError;
+    return output_ok ? cli::ExitCode::kOk : cli::ExitCode::kRuntimeError;
   } catch (const std::exception& e) {
     fmt::print(stderr, "dpc monitor: {}\n", e.what());
-    return kExitRuntimeError;
+    return cli::ExitCode::kRuntimeError;
   }
 }
 

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "dpc/cli/exit_code.h"
 #include "bus_tool_support.h"
 #include "dpc/control/target.h"
 #include "dpc/msg/bench.h"
@@ -38,7 +39,7 @@ struct MonitorOptions {
 
 CLI::App* AddMonitorCommand(CLI::App& app, MonitorOptions* options);
 
-int RunMonitorCommand(const MonitorOptions& options);
+cli::ExitCode RunMonitorCommand(const MonitorOptions& options);
 
 /// What the monitor has seen, folded from the bus's messages (not thread-safe: the command
 /// guards it with a mutex). Separate from the DDS wiring so that the line can be tested.

@@ -2,7 +2,7 @@
 
 #include <fmt/format.h>
 
-#include "exit_codes.h"
+#include "dpc/cli/exit_code.h"
 #include "paper_figure.h"
 #include "trace_format.h"
 
@@ -17,16 +17,16 @@ CLI::App* AddPlotCommand(CLI::App& app, PlotOptions* o) {
   return plot;
 }
 
-int RunPlotCommand(const PlotOptions& o) {
+cli::ExitCode RunPlotCommand(const PlotOptions& o) {
   try {
     FigureOptions options = FigureOptionsFromMetadata(ReadTraceMetadata(o.trace_path));
     if (!o.title.empty()) options.title = o.title;
     WritePaperFigure(o.trace_path, o.output_path, options);
     fmt::print("figure {}\n", o.output_path);
-    return kExitOk;
+    return cli::ExitCode::kOk;
   } catch (const std::exception& e) {
     fmt::print(stderr, "dpc plot: {}\n", e.what());
-    return kExitRuntimeError;
+    return cli::ExitCode::kRuntimeError;
   }
 }
 

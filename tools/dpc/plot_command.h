@@ -6,6 +6,8 @@
 
 #include <string>
 
+#include "dpc/cli/exit_code.h"
+
 namespace dpc::tools {
 
 struct PlotOptions {
@@ -15,6 +17,6 @@ struct PlotOptions {
 };
 
 CLI::App* AddPlotCommand(CLI::App& app, PlotOptions* options);
-int RunPlotCommand(const PlotOptions& options);
+cli::ExitCode RunPlotCommand(const PlotOptions& options);
 
 }  // namespace dpc::tools

@@ -13,11 +13,11 @@
 #include "dpc/sim/closed_loop_simulator.h"
 #include "dpc/sim/loop_stability.h"
 #include "dpc/sim/trace_writer.h"
-#include "exit_codes.h"
-#include "json_report.h"
+#include "dpc/cli/exit_code.h"
+#include "dpc/cli/run_report.h"
 #include "paper_figure.h"
 #include "progress_bar.h"
-#include "scenario_loading.h"
+#include "dpc/cli/scenario_loading.h"
 #include "trace_format.h"
 
 namespace dpc::tools {
@@ -69,21 +69,21 @@ CLI::App* AddSimCommand(CLI::App& app, SimOptions* o) {
   return sim;
 }
 
-int RunSimCommand(const SimOptions& o) {
+cli::ExitCode RunSimCommand(const SimOptions& o) {
   std::unique_ptr<ClosedLoopSimulator> simulator;
   try {
-    ScenarioConfig scenario = LoadScenarioWithOverrides(o.scenario_path, o.overrides);
+    ScenarioConfig scenario = cli::LoadScenarioWithOverrides(o.scenario_path, o.overrides, PaperScenario("131"));
     simulator = std::make_unique<ClosedLoopSimulator>(scenario);
   } catch (const ScenarioError& e) {
-    fmt::print(stderr, "dpc sim: {}\n", DescribeScenarioError(e, o.overrides));
-    return kExitInvalidInput;
+    fmt::print(stderr, "dpc sim: {}\n", cli::DescribeScenarioError(e, o.overrides));
+    return cli::ExitCode::kInvalidInput;
   } catch (const std::invalid_argument& e) {
     fmt::print(stderr, "dpc sim: invalid scenario: {}\n", e.what());
-    return kExitInvalidInput;
+    return cli::ExitCode::kInvalidInput;
   }
   if (o.print_scenario) {
     fmt::print("{}", ScenarioToText(simulator->scenario()));
-    return kExitOk;
+    return cli::ExitCode::kOk;
   }
   const std::vector<std::string> warnings = ScenarioWarnings(simulator->scenario());
   for (const auto& w : warnings) fmt::print(stderr, "dpc sim: warning: {}\n", w);
@@ -119,9 +119,9 @@ int RunSimCommand(const SimOptions& o) {
     if (trace) trace->Flush();
 
     if (o.json) {
-      std::cout << RunReportJson(*simulator, result, warnings).dump() << std::endl;
+      std::cout << cli::RunReportJson(cli::DescribeRun(*simulator), result, warnings).dump() << std::endl;
     } else {
-      fmt::print("{}", RunReportText(*simulator, result));
+      fmt::print("{}", cli::RunReportText(cli::DescribeRun(*simulator), result));
       if (trace) fmt::print("trace      {} ({} rows, every {} samples)\n", trace->path(),
                             trace->rows(), every);
     }
@@ -130,10 +130,10 @@ int RunSimCommand(const SimOptions& o) {
       WritePaperFigure(trace_path, o.plot_path, FigureOptionsFor(*simulator));
       if (!o.json) fmt::print("figure     {}\n", o.plot_path);
     }
-    return result.stopped_early ? kExitInterrupted : kExitOk;
+    return result.stopped_early ? cli::ExitCode::kInterrupted : cli::ExitCode::kOk;
   } catch (const std::exception& e) {
     fmt::print(stderr, "dpc sim: {}\n", e.what());
-    return kExitRuntimeError;
+    return cli::ExitCode::kRuntimeError;
   }
 }
 

@@ -8,13 +8,14 @@
 #include <optional>
 #include <string>
 
-#include "scenario_overrides.h"
+#include "dpc/cli/exit_code.h"
+#include "dpc/cli/scenario_overrides.h"
 
 namespace dpc::tools {
 
 struct SimOptions {
   std::string scenario_path;
-  ScenarioOverrides overrides;
+  cli::ScenarioOverrides overrides;
   std::string trace_path;
   int64_t trace_every = 0;  ///< 0: automatic (at most ~50k rows)
   std::string plot_path;
@@ -28,6 +29,6 @@ struct SimOptions {
 CLI::App* AddSimCommand(CLI::App& app, SimOptions* options);
 
 /// Runs it; returns the process exit code.
-int RunSimCommand(const SimOptions& options);
+cli::ExitCode RunSimCommand(const SimOptions& options);
 
 }  // namespace dpc::tools

@@ -15,11 +15,11 @@
 #include "dpc/control/control_law_factory.h"
 #include "dpc/sim/loop_stability.h"
 #include "dpc/sim/sweep_runner.h"
-#include "exit_codes.h"
-#include "json_report.h"
+#include "dpc/cli/exit_code.h"
+#include "dpc/cli/run_report.h"
 #include "paper_figure.h"
 #include "progress_bar.h"
-#include "scenario_loading.h"
+#include "dpc/cli/scenario_loading.h"
 
 namespace dpc::tools {
 namespace {
@@ -84,20 +84,20 @@ CLI::App* AddSweepCommand(CLI::App& app, SweepOptions* o) {
   return sweep;
 }
 
-int RunSweepCommand(const SweepOptions& o) {
+cli::ExitCode RunSweepCommand(const SweepOptions& o) {
   ScenarioConfig base;
   try {
-    base = LoadScenarioWithOverrides(o.scenario_path, o.overrides);
+    base = cli::LoadScenarioWithOverrides(o.scenario_path, o.overrides, PaperScenario("131"));
   } catch (const ScenarioError& e) {
-    fmt::print(stderr, "dpc sweep: {}\n", DescribeScenarioError(e, o.overrides));
-    return kExitInvalidInput;
+    fmt::print(stderr, "dpc sweep: {}\n", cli::DescribeScenarioError(e, o.overrides));
+    return cli::ExitCode::kInvalidInput;
   }
   std::vector<std::string> devices = o.devices;
   if (devices.empty()) devices.push_back("");
   std::vector<std::string> methods = o.methods;
   if (methods.empty()) methods.push_back(std::string(MethodName(base.controller.method)));
   std::vector<double> rates = o.rates_rad_per_s;
-  if (rates.empty()) rates.push_back(InputRateRadPerS(base));
+  if (rates.empty()) rates.push_back(cli::InputRateRadPerS(base));
   std::vector<uint64_t> seeds = o.seeds;
   if (seeds.empty()) seeds.push_back(base.simulation.seed);
   std::vector<std::string> predictions = o.predictions;
@@ -114,7 +114,7 @@ int RunSweepCommand(const SweepOptions& o) {
       for (double rate : rates) {
         Cell cell{device, method, prediction, rate, {}, 0, {}};
         for (uint64_t seed : seeds) {
-          ScenarioOverrides grid;
+          cli::ScenarioOverrides grid;
           if (!device.empty()) grid.stages_axes = device;
           grid.method = method;
           grid.predict = prediction == "on";
@@ -127,7 +127,7 @@ int RunSweepCommand(const SweepOptions& o) {
           } catch (const ScenarioError& e) {
             // The grid's values come from the sweep's list flags: name those.
             fmt::print(stderr, "dpc sweep: {}: {}\n", SweepFlagFor(e.location()), e.message());
-            return kExitInvalidInput;
+            return cli::ExitCode::kInvalidInput;
           }
           try {
             ValidateScenario(scenario);
@@ -135,11 +135,11 @@ int RunSweepCommand(const SweepOptions& o) {
             // A field the grid set is named by the run; the others by the flag that set them.
             const std::string text = grid.FlagForField(e.location())
                                          ? fmt::format("invalid scenario: {}", e.what())
-                                         : DescribeScenarioError(e, o.overrides);
+                                         : cli::DescribeScenarioError(e, o.overrides);
             fmt::print(stderr,
                        "dpc sweep: {} (run: device {}, method {}, rate {:g} rad/s, seed {})\n",
                        text, device.empty() ? "scenario" : device, method, rate, seed);
-            return kExitInvalidInput;
+            return cli::ExitCode::kInvalidInput;
           }
           for (const std::string& warning : ScenarioWarnings(scenario)) {
             if (std::find(warnings.begin(), warnings.end(), warning) == warnings.end()) {
@@ -177,7 +177,7 @@ int RunSweepCommand(const SweepOptions& o) {
     if (o.json && outcomes[i].ok) {
       // The settings come from a simulator built (cheaply) for the report.
       const ClosedLoopSimulator simulator(scenarios[i]);
-      std::cout << RunReportJson(simulator, outcomes[i].result, {}).dump() << '\n';
+      std::cout << cli::RunReportJson(cli::DescribeRun(simulator), outcomes[i].result, {}).dump() << '\n';
     }
   }
 
@@ -243,12 +243,12 @@ int RunSweepCommand(const SweepOptions& o) {
     }
   } catch (const std::exception& e) {
     fmt::print(stderr, "dpc sweep: {}\n", e.what());
-    return kExitRuntimeError;
+    return cli::ExitCode::kRuntimeError;
   }
   for (const Cell& cell : cells) {
-    if (cell.failed) return g_stop.load() ? kExitInterrupted : kExitRuntimeError;
+    if (cell.failed) return g_stop.load() ? cli::ExitCode::kInterrupted : cli::ExitCode::kRuntimeError;
   }
-  return kExitOk;
+  return cli::ExitCode::kOk;
 }
 
 }  // namespace dpc::tools

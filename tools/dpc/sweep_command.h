@@ -9,13 +9,14 @@
 #include <string>
 #include <vector>
 
-#include "scenario_overrides.h"
+#include "dpc/cli/exit_code.h"
+#include "dpc/cli/scenario_overrides.h"
 
 namespace dpc::tools {
 
 struct SweepOptions {
   std::string scenario_path;
-  ScenarioOverrides overrides;
+  cli::ScenarioOverrides overrides;
   std::vector<double> rates_rad_per_s;
   std::vector<std::string> methods;
   std::vector<uint64_t> seeds;
@@ -30,6 +31,6 @@ struct SweepOptions {
 };
 
 CLI::App* AddSweepCommand(CLI::App& app, SweepOptions* options);
-int RunSweepCommand(const SweepOptions& options);
+cli::ExitCode RunSweepCommand(const SweepOptions& options);
 
 }  // namespace dpc::tools

@@ -12,7 +12,7 @@
 #include "dpc/bench/clock.h"
 #include "dpc/config/scenario_error.h"
 #include "dpc/config/scenario_validation.h"
-#include "exit_codes.h"
+#include "dpc/cli/exit_code.h"
 
 namespace dpc::tools {
 namespace {
@@ -92,17 +92,17 @@ std::optional<TargetConfig> TargetFromOptions(const TargetOptions& o, std::strin
   return target;
 }
 
-int RunTargetCommand(const TargetOptions& o) {
+cli::ExitCode RunTargetCommand(const TargetOptions& o) {
   std::string error;
   const std::optional<TargetConfig> target = TargetFromOptions(o, &error);
   if (!target) {
     fmt::print(stderr, "dpc target: {} (nothing sent)\n", error);
-    return kExitInvalidInput;
+    return cli::ExitCode::kInvalidInput;
   }
   if (o.bus.bench_id.empty() || o.bus.bench_id == "*" || o.bus.bench_id.size() > 63) {
     fmt::print(stderr, "dpc target: --bench-id: \"{}\" is not a bench id (1 to 63 characters, "
                        "not \"*\": a target request goes to one bench)\n", o.bus.bench_id);
-    return kExitInvalidInput;
+    return cli::ExitCode::kInvalidInput;
   }
 
   StopSignals signals;
@@ -140,18 +140,18 @@ int RunTargetCommand(const TargetOptions& o) {
         [&] { return writer->matched_readers() > 0 && replies->counters().matched_writers.load() > 0; },
         o.timeout_s);
     if (!matched) {
-      if (StopSignals::requested()) return kExitInterrupted;
+      if (StopSignals::requested()) return cli::ExitCode::kInterrupted;
       fmt::print(stderr,
                  "dpc target: no driver on domain {} within {:g} s ({}; is dpc-driver running "
                  "with this --domain?) — nothing sent\n",
                  o.bus.domain_id, o.timeout_s,
                  writer->matched_readers() == 0 ? "no reader of dpc_target_request matched"
                                                 : "no writer of dpc_target_reply matched");
-      return kExitRuntimeError;
+      return cli::ExitCode::kRuntimeError;
     }
     if (!writer->Write(request)) {
       fmt::print(stderr, "dpc target: Fast DDS refused to write the request\n");
-      return kExitRuntimeError;
+      return cli::ExitCode::kRuntimeError;
     }
     const double remaining_s = std::max(0.1, o.timeout_s - SecondsSince(start));
     const bool answered = WaitFor(
@@ -162,17 +162,17 @@ int RunTargetCommand(const TargetOptions& o) {
         remaining_s);
     std::lock_guard<std::mutex> lock(mutex);
     if (!answered) {
-      if (StopSignals::requested()) return kExitInterrupted;
+      if (StopSignals::requested()) return cli::ExitCode::kInterrupted;
       fmt::print(stderr,
                  "dpc target: request {} sent, but no reply from the driver of bench {} on domain "
                  "{} within {:g} s (is the driver's --bench-id {}?)\n",
                  request_id, o.bus.bench_id, o.bus.domain_id, o.timeout_s, o.bus.bench_id);
-      return kExitRuntimeError;
+      return cli::ExitCode::kRuntimeError;
     }
     if (reply && !reply->accepted()) {
       fmt::print(stderr, "dpc target: the driver refused request {}: {}\n", request_id,
                  reply->message().to_string());
-      return kExitInvalidInput;
+      return cli::ExitCode::kInvalidInput;
     }
     const uint64_t revision = reply ? reply->revision() : applied->revision();
     const std::string shape = target->kind == TargetConfig::Kind::kPoint
@@ -181,10 +181,10 @@ int RunTargetCommand(const TargetOptions& o) {
                                                 FormatValues(target->normal.data(), 3), target->offset);
     fmt::print("accepted: bench {} target revision {}: {} (request {})\n", o.bus.bench_id, revision,
                shape, request_id);
-    return kExitOk;
+    return cli::ExitCode::kOk;
   } catch (const std::exception& e) {
     fmt::print(stderr, "dpc target: {}\n", e.what());
-    return kExitRuntimeError;
+    return cli::ExitCode::kRuntimeError;
   }
 }
 

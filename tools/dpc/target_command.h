@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "dpc/cli/exit_code.h"
 #include "bus_tool_support.h"
 #include "dpc/config/scenario_config.h"
 
@@ -41,6 +42,6 @@ CLI::App* AddTargetCommand(CLI::App& app, TargetOptions* options);
 /// nullopt with `error` naming the flag ("--point: [1, 1, 0] has |S| = 1.41421356; …").
 std::optional<TargetConfig> TargetFromOptions(const TargetOptions& options, std::string* error);
 
-int RunTargetCommand(const TargetOptions& options);
+cli::ExitCode RunTargetCommand(const TargetOptions& options);
 
 }  // namespace dpc::tools

@@ -19,7 +19,7 @@
 
 #include "bus_messages.h"
 #include "dpc/bus/bus_participant.h"
-#include "exit_codes.h"
+#include "dpc/cli/exit_code.h"
 
 namespace dpc::tools {
 namespace {
@@ -105,7 +105,7 @@ class DiscoveryListener final : public fdds::DomainParticipantListener {
 // ---- echo
 
 template <typename Message>
-int RunEchoOf(const TopicEchoOptions& o, const BusTopic& topic) {
+cli::ExitCode RunEchoOf(const TopicEchoOptions& o, const BusTopic& topic) {
   std::mutex mutex;
   std::condition_variable arrived;
   std::deque<std::string> lines;
@@ -149,7 +149,7 @@ int RunEchoOf(const TopicEchoOptions& o, const BusTopic& topic) {
                    "bench running on this domain and bench id?)\n",
                    topic.name, o.bus.domain_id, o.bus.bench_id.empty() ? "*" : o.bus.bench_id,
                    o.timeout_s);
-        return kExitNoData;
+        return cli::ExitCode::kNoData;
       }
       if (o.count > 0) {
         fmt::print(stderr, "dpc topic echo: {} of {} samples within {:g} s\n", printed, o.count,
@@ -158,7 +158,7 @@ int RunEchoOf(const TopicEchoOptions& o, const BusTopic& topic) {
       break;
     }
   }
-  return output_ok ? kExitOk : kExitRuntimeError;
+  return output_ok ? cli::ExitCode::kOk : cli::ExitCode::kRuntimeError;
 }
 
 // ---- hz
@@ -169,7 +169,7 @@ struct WindowStats {
 };
 
 template <typename Message>
-int RunHzOf(const TopicHzOptions& o, const BusTopic& topic) {
+cli::ExitCode RunHzOf(const TopicHzOptions& o, const BusTopic& topic) {
   std::mutex mutex;
   std::vector<Clock::time_point> arrivals;
   arrivals.reserve(1 << 16);
@@ -185,11 +185,11 @@ int RunHzOf(const TopicHzOptions& o, const BusTopic& topic) {
     return !arrivals.empty();
   };
   if (!WaitFor(has_sample, o.timeout_s)) {
-    if (StopSignals::requested()) return kExitOk;
+    if (StopSignals::requested()) return cli::ExitCode::kOk;
     fmt::print(stderr, "dpc topic hz: no sample on {} (domain {}, bench {}) within {:g} s\n",
                topic.name, o.bus.domain_id, o.bus.bench_id.empty() ? "*" : o.bus.bench_id,
                o.timeout_s);
-    return kExitNoData;
+    return cli::ExitCode::kNoData;
   }
   Clock::time_point last;
   {
@@ -250,9 +250,9 @@ int RunHzOf(const TopicHzOptions& o, const BusTopic& topic) {
       line = fmt::format("{}: rate_hz=0.0 samples=0 window_s={:g} (no samples)", topic.name,
                          o.window_s);
     }
-    if (!PrintLine(line)) return kExitRuntimeError;
+    if (!PrintLine(line)) return cli::ExitCode::kRuntimeError;
   }
-  return kExitOk;
+  return cli::ExitCode::kOk;
 }
 
 std::optional<BusTopic> ResolveOrExplain(const std::string& name, const char* command) {
@@ -265,15 +265,16 @@ std::optional<BusTopic> ResolveOrExplain(const std::string& name, const char* co
 }
 
 template <typename Body>
-int GuardBusErrors(const char* command, Body&& body) {
+cli::ExitCode GuardBusErrors(const char* command, Body&& body) {
   try {
     return body();
   } catch (const bus::BusError& e) {
     fmt::print(stderr, "dpc topic {}: {}\n", command, e.what());
+    return cli::ExitCode::kInitializationError;
   } catch (const std::exception& e) {
     fmt::print(stderr, "dpc topic {}: {}\n", command, e.what());
   }
-  return kExitRuntimeError;
+  return cli::ExitCode::kRuntimeError;
 }
 
 }  // namespace
@@ -324,16 +325,16 @@ CLI::App* AddTopicCommand(CLI::App& app, TopicOptions* o) {
   return topic;
 }
 
-int RunTopicCommand(const TopicOptions& o) {
+cli::ExitCode RunTopicCommand(const TopicOptions& o) {
   if (o.list_command != nullptr && o.list_command->parsed()) return RunTopicList(o.list);
   if (o.echo_command != nullptr && o.echo_command->parsed()) return RunTopicEcho(o.echo);
   if (o.hz_command != nullptr && o.hz_command->parsed()) return RunTopicHz(o.hz);
-  return kExitInvalidInput;
+  return cli::ExitCode::kInvalidInput;
 }
 
-int RunTopicList(const TopicListOptions& o) {
+cli::ExitCode RunTopicList(const TopicListOptions& o) {
   StopSignals signals;
-  return GuardBusErrors("list", [&]() -> int {
+  return GuardBusErrors("list", [&]() -> cli::ExitCode {
     // Our own participant (not bus::BusParticipant) so that the listener is there from the
     // start: discovery callbacks begin as soon as the participant exists.
     const std::string profiles = bus::ResolveProfilesFile();
@@ -357,7 +358,7 @@ int RunTopicList(const TopicListOptions& o) {
     const auto participants = listener.participants();
     participant->set_listener(nullptr);
     factory->delete_participant(participant);
-    if (StopSignals::requested()) return kExitOk;
+    if (StopSignals::requested()) return cli::ExitCode::kOk;
 
     struct Row {
       std::set<std::string> types;
@@ -372,7 +373,7 @@ int RunTopicList(const TopicListOptions& o) {
     if (rows.empty()) {
       fmt::print(stderr, "dpc topic list: no topics discovered on domain {} within {:g} s\n",
                  o.bus.domain_id, o.wait_s);
-      return kExitOk;
+      return cli::ExitCode::kOk;
     }
     size_t name_width = 5, type_width = 4;
     for (const auto& [name, row] : rows) {
@@ -392,13 +393,13 @@ int RunTopicList(const TopicListOptions& o) {
     std::sort(names.begin(), names.end());
     out += fmt::format("participants ({}): {}\n", names.size(), fmt::join(names, ", "));
     std::fputs(out.c_str(), stdout);
-    return std::fflush(stdout) == 0 ? kExitOk : kExitRuntimeError;
+    return std::fflush(stdout) == 0 ? cli::ExitCode::kOk : cli::ExitCode::kRuntimeError;
   });
 }
 
-int RunTopicEcho(const TopicEchoOptions& o) {
+cli::ExitCode RunTopicEcho(const TopicEchoOptions& o) {
   const auto topic = ResolveOrExplain(o.topic, "echo");
-  if (!topic) return kExitInvalidInput;
+  if (!topic) return cli::ExitCode::kInvalidInput;
   StopSignals signals;
   return GuardBusErrors("echo", [&] {
     return WithTopicMessage(topic->name, [&](auto type) {
@@ -407,9 +408,9 @@ int RunTopicEcho(const TopicEchoOptions& o) {
   });
 }
 
-int RunTopicHz(const TopicHzOptions& o) {
+cli::ExitCode RunTopicHz(const TopicHzOptions& o) {
   const auto topic = ResolveOrExplain(o.topic, "hz");
-  if (!topic) return kExitInvalidInput;
+  if (!topic) return cli::ExitCode::kInvalidInput;
   StopSignals signals;
   return GuardBusErrors("hz", [&] {
     return WithTopicMessage(topic->name, [&](auto type) {

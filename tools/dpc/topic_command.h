@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <string>
 
+#include "dpc/cli/exit_code.h"
 #include "bus_tool_support.h"
 
 namespace dpc::tools {
@@ -59,10 +60,10 @@ struct TopicOptions {
 CLI::App* AddTopicCommand(CLI::App& app, TopicOptions* options);
 
 /// Runs the subcommand that was parsed; returns the process exit code.
-int RunTopicCommand(const TopicOptions& options);
+cli::ExitCode RunTopicCommand(const TopicOptions& options);
 
-int RunTopicList(const TopicListOptions& options);
-int RunTopicEcho(const TopicEchoOptions& options);
-int RunTopicHz(const TopicHzOptions& options);
+cli::ExitCode RunTopicList(const TopicListOptions& options);
+cli::ExitCode RunTopicEcho(const TopicEchoOptions& options);
+cli::ExitCode RunTopicHz(const TopicHzOptions& options);
 
 }  // namespace dpc::tools

@@ -497,8 +497,13 @@ void SimulationToProto(const SimulationConfig& s, scenario::Simulation* p) {
 
 std::string ReadScenarioText(const std::string& path) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
+  const std::filesystem::file_status status = std::filesystem::status(path, ec);
+  if (std::filesystem::is_directory(status)) {
     throw ScenarioError(path, "is a directory; expected a scenario file (.pbtxt)");
+  }
+  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) {
+    // A FIFO or a device would block the reader (a service at start-up) or never end.
+    throw ScenarioError(path, "is not a regular file (a pipe, socket or device); expected a scenario file (.pbtxt)");
   }
   std::ifstream file(path, std::ios::binary);
   if (!file) {

@@ -7,6 +7,7 @@
 #include <google/protobuf/descriptor.h>
 #include <google/protobuf/message.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cmath>
 #include <cstdio>
@@ -625,6 +626,17 @@ TEST_F(ScenarioTextFileTest, MissingFileIsLocatedAtThePath) {
 
 TEST_F(ScenarioTextFileTest, DirectoryIsRejected) {
   EXPECT_THROW(LoadScenarioFile(::testing::TempDir()), ScenarioError);
+}
+
+TEST_F(ScenarioTextFileTest, AFifoIsRefusedWithoutBlocking) {
+  // Opening a FIFO for reading blocks until a writer comes; a service reading one at start-up
+  // would hang and ignore SIGTERM.
+  ASSERT_EQ(::mkfifo(path_.c_str(), 0600), 0);
+  const auto error = LoadError();
+  ::unlink(path_.c_str());
+  ASSERT_TRUE(error);
+  EXPECT_EQ(error->location(), path_);
+  EXPECT_THAT(error->message(), HasSubstr("not a regular file"));
 }
 
 TEST_F(ScenarioTextFileTest, OversizedFileIsLocatedAtThePath) {

@@ -12,7 +12,7 @@
 
 #include "dpc/sim/closed_loop_simulator.h"
 #include "dpc/sim/trace_writer.h"
-#include "exit_codes.h"
+#include "dpc/cli/exit_code.h"
 #include "trace_format.h"
 
 namespace dpc::tools {
@@ -41,10 +41,10 @@ class PlotCommandTest : public ::testing::Test {
     app_.parse(static_cast<int>(argv.size()), argv.data());
   }
 
-  int Run() {
+  cli::ExitCode Run() {
     ::testing::internal::CaptureStdout();
     ::testing::internal::CaptureStderr();
-    const int code = RunPlotCommand(options_);
+    const cli::ExitCode code = RunPlotCommand(options_);
     out_ = ::testing::internal::GetCapturedStdout();
     err_ = ::testing::internal::GetCapturedStderr();
     return code;
@@ -119,7 +119,7 @@ TEST_F(PlotCommandTest, TraceMustExist) {
 TEST_F(PlotCommandTest, DrawsTheFigure) {
   WriteTrace(true);
   Parse({trace_, "-o", png_});
-  ASSERT_EQ(Run(), kExitOk) << err_;
+  ASSERT_EQ(Run(), cli::ExitCode::kOk) << err_;
   EXPECT_TRUE(IsPng(png_));
   EXPECT_EQ(out_, "figure " + png_ + "\n");
   EXPECT_TRUE(err_.empty()) << err_;
@@ -128,14 +128,14 @@ TEST_F(PlotCommandTest, DrawsTheFigure) {
 TEST_F(PlotCommandTest, DrawsTheFigureWithAGivenTitle) {
   WriteTrace(true);
   Parse({trace_, "-o", png_, "--title", "another title"});
-  ASSERT_EQ(Run(), kExitOk) << err_;
+  ASSERT_EQ(Run(), cli::ExitCode::kOk) << err_;
   EXPECT_TRUE(IsPng(png_));
 }
 
 TEST_F(PlotCommandTest, AMissingTraceIsARuntimeError) {
   options_.trace_path = PathIn("missing.csv");  // past the command line's existence check
   options_.output_path = png_;
-  EXPECT_EQ(Run(), kExitRuntimeError);
+  EXPECT_EQ(Run(), cli::ExitCode::kRuntimeError);
   EXPECT_NE(err_.find("dpc plot: "), std::string::npos) << err_;
   EXPECT_NE(err_.find("missing.csv"), std::string::npos) << err_;
   EXPECT_FALSE(fs::exists(png_));
@@ -144,7 +144,7 @@ TEST_F(PlotCommandTest, AMissingTraceIsARuntimeError) {
 TEST_F(PlotCommandTest, ATraceNotWrittenByDpcSimIsARuntimeError) {
   WriteTrace(false);
   Parse({trace_, "-o", png_});
-  EXPECT_EQ(Run(), kExitRuntimeError);
+  EXPECT_EQ(Run(), cli::ExitCode::kRuntimeError);
   EXPECT_NE(err_.find("not a dpc trace"), std::string::npos) << err_;
   EXPECT_FALSE(fs::exists(png_));
 }
@@ -152,7 +152,7 @@ TEST_F(PlotCommandTest, ATraceNotWrittenByDpcSimIsARuntimeError) {
 TEST_F(PlotCommandTest, AnUnwritableOutputIsARuntimeError) {
   WriteTrace(true);
   Parse({trace_, "-o", PathIn("missing_directory/figure.png")});
-  EXPECT_EQ(Run(), kExitRuntimeError);
+  EXPECT_EQ(Run(), cli::ExitCode::kRuntimeError);
   EXPECT_NE(err_.find("missing_directory"), std::string::npos) << err_;
   EXPECT_TRUE(out_.empty()) << out_;
 }

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "dpc/scenario_io/scenario_text.h"
-#include "exit_codes.h"
+#include "dpc/cli/exit_code.h"
 
 namespace dpc::tools {
 namespace {
@@ -49,7 +49,7 @@ class SimCommandTest : public ::testing::Test {
   }
 
   // Parses `dpc sim <args> <kShortRun>` and runs it, capturing stdout and stderr.
-  int Run(std::vector<std::string> args) {
+  cli::ExitCode Run(std::vector<std::string> args) {
     for (const auto& [flag, value] : kShortRun) {  // unless `args` gives its own value
       if (std::find(args.begin(), args.end(), flag) == args.end()) {
         args.insert(args.end(), {flag, value});
@@ -59,7 +59,7 @@ class SimCommandTest : public ::testing::Test {
     Parse(args);
     ::testing::internal::CaptureStdout();
     ::testing::internal::CaptureStderr();
-    const int code = RunSimCommand(options_);
+    const cli::ExitCode code = RunSimCommand(options_);
     out_ = ::testing::internal::GetCapturedStdout();
     err_ = ::testing::internal::GetCapturedStderr();
     return code;
@@ -142,7 +142,7 @@ TEST_F(SimCommandTest, TraceEveryMustBePositive) {
 }
 
 TEST_F(SimCommandTest, JsonPrintsOneParseableObject) {
-  ASSERT_EQ(Run({"--json", "--seed", "3"}), kExitOk) << err_;
+  ASSERT_EQ(Run({"--json", "--seed", "3"}), cli::ExitCode::kOk) << err_;
   ASSERT_EQ(out_.find('\n'), out_.size() - 1) << "one line: " << out_;
   const nlohmann::json j = nlohmann::json::parse(out_);
   ASSERT_TRUE(j.is_object());
@@ -155,7 +155,7 @@ TEST_F(SimCommandTest, JsonPrintsOneParseableObject) {
 }
 
 TEST_F(SimCommandTest, TextPrintsTheSummary) {
-  ASSERT_EQ(Run({}), kExitOk) << err_;
+  ASSERT_EQ(Run({}), cli::ExitCode::kOk) << err_;
   EXPECT_EQ(out_.rfind("scenario   paper-131", 0), 0u) << out_;
   EXPECT_NE(out_.find("lock "), std::string::npos) << out_;
   EXPECT_NE(out_.find("50000 samples"), std::string::npos) << out_;
@@ -165,14 +165,14 @@ TEST_F(SimCommandTest, TextPrintsTheSummary) {
 TEST_F(SimCommandTest, ScenarioFileIsRun) {
   const std::string path = WriteFile(
       "two.pbtxt", "name: \"two-stage\"\nstages { axis: S1 }\nstages { axis: S3 }\n");
-  ASSERT_EQ(Run({path, "--json"}), kExitOk) << err_;
+  ASSERT_EQ(Run({path, "--json"}), cli::ExitCode::kOk) << err_;
   const nlohmann::json j = nlohmann::json::parse(out_);
   EXPECT_EQ(j["scenario"], "two-stage");
   EXPECT_EQ(j["controls"], 2);
 }
 
 TEST_F(SimCommandTest, WarningsGoToStderrAndTheJson) {
-  ASSERT_EQ(Run({"--loop", "measured", "--json"}), kExitOk) << err_;
+  ASSERT_EQ(Run({"--loop", "measured", "--json"}), cli::ExitCode::kOk) << err_;
   EXPECT_NE(err_.find("dpc sim: warning: "), std::string::npos) << err_;
   const nlohmann::json j = nlohmann::json::parse(out_);
   ASSERT_FALSE(j["warnings"].empty()) << out_;
@@ -181,7 +181,7 @@ TEST_F(SimCommandTest, WarningsGoToStderrAndTheJson) {
 
 TEST_F(SimCommandTest, TraceIsWrittenWithTheChosenDecimation) {
   const std::string trace = PathIn("run.csv");
-  ASSERT_EQ(Run({"--trace", trace, "--trace-every", "100"}), kExitOk) << err_;
+  ASSERT_EQ(Run({"--trace", trace, "--trace-every", "100"}), cli::ExitCode::kOk) << err_;
   const std::string text = Slurp(trace);
   EXPECT_EQ(text.rfind("# dpc-trace\n", 0), 0u);
   EXPECT_NE(text.find("# trace_every=100\n"), std::string::npos);
@@ -195,7 +195,7 @@ TEST_F(SimCommandTest, TraceDecimationDefaultsToAboutFiftyThousandRows) {
   const std::string trace = PathIn("run.csv");
   ASSERT_EQ(Run({"--trace", trace, "--sample-rate-hz", "1e6", "--duration-s", "0.2",
                  "--activation-s", "1e-3", "--rate-rad-per-s", "1e3"}),
-            kExitOk)
+            cli::ExitCode::kOk)
       << err_;
   EXPECT_NE(Slurp(trace).find("# trace_every=4\n"), std::string::npos);
   EXPECT_EQ(DataRows(trace), 50000);
@@ -203,14 +203,14 @@ TEST_F(SimCommandTest, TraceDecimationDefaultsToAboutFiftyThousandRows) {
 
 TEST_F(SimCommandTest, PlotWritesAPngAndItsTraceNextToIt) {
   const std::string png = PathIn("fig.png");
-  ASSERT_EQ(Run({"--plot", png}), kExitOk) << err_;
+  ASSERT_EQ(Run({"--plot", png}), cli::ExitCode::kOk) << err_;
   EXPECT_TRUE(IsPng(png));
   EXPECT_TRUE(fs::exists(directory_ / "fig.csv"));
   EXPECT_NE(out_.find("figure     " + png), std::string::npos) << out_;
 }
 
 TEST_F(SimCommandTest, PrintScenarioPrintsTheEffectiveScenarioAndRunsNothing) {
-  ASSERT_EQ(Run({"--step", "0.3", "--print-scenario"}), kExitOk) << err_;
+  ASSERT_EQ(Run({"--step", "0.3", "--print-scenario"}), cli::ExitCode::kOk) << err_;
   const ScenarioConfig printed = ScenarioFromProto(ParseScenarioText(out_, "<stdout>"));
   EXPECT_NEAR(printed.controller.step, 0.3, kTolerance);
   EXPECT_NEAR(printed.simulation.duration_s, 1e-3, kTolerance);
@@ -218,14 +218,14 @@ TEST_F(SimCommandTest, PrintScenarioPrintsTheEffectiveScenarioAndRunsNothing) {
 }
 
 TEST_F(SimCommandTest, AnInvalidFlagValueIsAnInvalidScenario) {
-  EXPECT_EQ(Run({"--step", "-1", "--json"}), kExitInvalidInput);
+  EXPECT_EQ(Run({"--step", "-1", "--json"}), cli::ExitCode::kInvalidInput);
   EXPECT_NE(err_.find("dpc sim: invalid scenario: controller.step: "), std::string::npos) << err_;
   EXPECT_NE(err_.find("(set by --step)"), std::string::npos) << err_;
   EXPECT_TRUE(out_.empty()) << out_;
 }
 
 TEST_F(SimCommandTest, AnUnknownMethodIsAnInvalidScenario) {
-  EXPECT_EQ(Run({"--method", "newton"}), kExitInvalidInput);
+  EXPECT_EQ(Run({"--method", "newton"}), cli::ExitCode::kInvalidInput);
   EXPECT_NE(err_.find("--method"), std::string::npos) << err_;
   EXPECT_TRUE(out_.empty()) << out_;
 }
@@ -233,26 +233,26 @@ TEST_F(SimCommandTest, AnUnknownMethodIsAnInvalidScenario) {
 TEST_F(SimCommandTest, AnInvalidFileValueIsAnInvalidScenario) {
   const std::string path =
       WriteFile("bad.pbtxt", "stages { axis: S1 }\ncontroller { damping: -1 }\n");
-  EXPECT_EQ(Run({path}), kExitInvalidInput);
+  EXPECT_EQ(Run({path}), cli::ExitCode::kInvalidInput);
   EXPECT_NE(err_.find("controller.damping"), std::string::npos) << err_;
   EXPECT_EQ(err_.find("(set by"), std::string::npos) << err_;
 }
 
 TEST_F(SimCommandTest, ASyntaxErrorIsAnInvalidScenario) {
   const std::string path = WriteFile("syntax.pbtxt", "stages { axis: S1 ");
-  EXPECT_EQ(Run({path}), kExitInvalidInput);
+  EXPECT_EQ(Run({path}), cli::ExitCode::kInvalidInput);
   EXPECT_NE(err_.find(path + ":1:"), std::string::npos) << err_;
 }
 
 TEST_F(SimCommandTest, AnUnwritablePlotPathIsARuntimeError) {
   const std::string png = PathIn("missing_directory/fig.png");
-  EXPECT_EQ(Run({"--plot", png, "--json"}), kExitRuntimeError);
+  EXPECT_EQ(Run({"--plot", png, "--json"}), cli::ExitCode::kRuntimeError);
   EXPECT_NE(err_.find("missing_directory"), std::string::npos) << err_;
   EXPECT_TRUE(out_.empty()) << out_;
 }
 
 TEST_F(SimCommandTest, AnUnwritableTracePathIsARuntimeError) {
-  EXPECT_EQ(Run({"--trace", PathIn("missing_directory/run.csv")}), kExitRuntimeError);
+  EXPECT_EQ(Run({"--trace", PathIn("missing_directory/run.csv")}), cli::ExitCode::kRuntimeError);
   EXPECT_NE(err_.find("missing_directory/run.csv"), std::string::npos) << err_;
 }
 

@@ -14,7 +14,7 @@
 #include <utility>
 #include <vector>
 
-#include "exit_codes.h"
+#include "dpc/cli/exit_code.h"
 
 namespace dpc::tools {
 namespace {
@@ -55,7 +55,7 @@ class SweepCommandTest : public ::testing::Test {
   }
 
   // Parses `dpc sweep <args> <kShortRuns>` and runs it, capturing stdout and stderr.
-  int Run(std::vector<std::string> args) {
+  cli::ExitCode Run(std::vector<std::string> args) {
     for (const auto& [flag, value] : kShortRuns) {  // unless `args` gives its own value
       if (std::find(args.begin(), args.end(), flag) == args.end()) {
         args.insert(args.end(), {flag, value});
@@ -65,7 +65,7 @@ class SweepCommandTest : public ::testing::Test {
     Parse(args);
     ::testing::internal::CaptureStdout();
     ::testing::internal::CaptureStderr();
-    const int code = RunSweepCommand(options_);
+    const cli::ExitCode code = RunSweepCommand(options_);
     out_ = ::testing::internal::GetCapturedStdout();
     err_ = ::testing::internal::GetCapturedStderr();
     return code;
@@ -112,7 +112,7 @@ TEST_F(SweepCommandTest, ScenarioFileMustExist) {
 }
 
 TEST_F(SweepCommandTest, PrintsOneRowPerMethodAndRate) {
-  ASSERT_EQ(Run({"--methods", "gp,pinv", "--rates", "1e3,1e4", "--seeds", "1,2"}), kExitOk)
+  ASSERT_EQ(Run({"--methods", "gp,pinv", "--rates", "1e3,1e4", "--seeds", "1,2"}), cli::ExitCode::kOk)
       << err_;
   const std::vector<std::string> lines = Lines(out_);
   ASSERT_EQ(lines.size(), 5u) << out_;
@@ -127,7 +127,7 @@ TEST_F(SweepCommandTest, PrintsOneRowPerMethodAndRate) {
 }
 
 TEST_F(SweepCommandTest, DevicesNameTheirRows) {
-  ASSERT_EQ(Run({"--devices", "131,3131", "--rates", "1e3"}), kExitOk) << err_;
+  ASSERT_EQ(Run({"--devices", "131,3131", "--rates", "1e3"}), cli::ExitCode::kOk) << err_;
   const std::vector<std::string> rows = TableRows();
   ASSERT_EQ(rows.size(), 2u) << out_;
   EXPECT_EQ(rows[0].rfind("131 ", 0), 0u) << rows[0];
@@ -135,7 +135,7 @@ TEST_F(SweepCommandTest, DevicesNameTheirRows) {
 }
 
 TEST_F(SweepCommandTest, WithoutAGridRunsTheScenarioOnce) {
-  ASSERT_EQ(Run({}), kExitOk) << err_;
+  ASSERT_EQ(Run({}), cli::ExitCode::kOk) << err_;
   const std::vector<std::string> rows = TableRows();
   ASSERT_EQ(rows.size(), 1u) << out_;
   EXPECT_EQ(rows[0].rfind("scenario gp", 0), 0u) << rows[0];
@@ -143,7 +143,7 @@ TEST_F(SweepCommandTest, WithoutAGridRunsTheScenarioOnce) {
 }
 
 TEST_F(SweepCommandTest, JsonPrintsOneObjectPerRunAndNoTable) {
-  ASSERT_EQ(Run({"--methods", "gp,pinv", "--rates", "1e3", "--seeds", "4,5", "--json"}), kExitOk)
+  ASSERT_EQ(Run({"--methods", "gp,pinv", "--rates", "1e3", "--seeds", "4,5", "--json"}), cli::ExitCode::kOk)
       << err_;
   const std::vector<std::string> lines = Lines(out_);
   ASSERT_EQ(lines.size(), 4u) << out_;
@@ -163,7 +163,7 @@ TEST_F(SweepCommandTest, JsonPrintsOneObjectPerRunAndNoTable) {
 
 TEST_F(SweepCommandTest, CsvHoldsTheTable) {
   const std::string csv = PathIn("sweep.csv");
-  ASSERT_EQ(Run({"--methods", "gp", "--rates", "1e3,1e4", "--csv", csv}), kExitOk) << err_;
+  ASSERT_EQ(Run({"--methods", "gp", "--rates", "1e3,1e4", "--csv", csv}), cli::ExitCode::kOk) << err_;
   std::ifstream in(csv);
   std::stringstream text;
   text << in.rdbuf();
@@ -179,7 +179,7 @@ TEST_F(SweepCommandTest, PredictionsCompareWithAndWithoutDelayCompensation) {
   const std::string png = PathIn("sweep.png");
   ASSERT_EQ(Run({"--rates", "1e5", "--predictions", "off,on", "--csv", csv, "--plot", png,
                  "--reference-deg", "1.15", "--duration-s", "4e-3"}),
-            kExitOk)
+            cli::ExitCode::kOk)
       << err_;
   std::ifstream in(csv);
   std::stringstream text;
@@ -206,7 +206,7 @@ TEST_F(SweepCommandTest, PredictionsRefuseOtherValues) {
 
 TEST_F(SweepCommandTest, PlotWritesAPng) {
   const std::string png = PathIn("sweep.png");
-  ASSERT_EQ(Run({"--methods", "gp", "--rates", "1e3,1e4", "--plot", png}), kExitOk) << err_;
+  ASSERT_EQ(Run({"--methods", "gp", "--rates", "1e3,1e4", "--plot", png}), cli::ExitCode::kOk) << err_;
   std::ifstream in(png, std::ios::binary);
   std::array<char, 8> signature{};
   in.read(signature.data(), signature.size());
@@ -215,27 +215,27 @@ TEST_F(SweepCommandTest, PlotWritesAPng) {
 }
 
 TEST_F(SweepCommandTest, AnUnknownMethodFlagIsAnInvalidScenario) {
-  EXPECT_EQ(Run({"--method", "newton"}), kExitInvalidInput);
+  EXPECT_EQ(Run({"--method", "newton"}), cli::ExitCode::kInvalidInput);
   EXPECT_NE(err_.find("--method"), std::string::npos) << err_;
   EXPECT_TRUE(out_.empty()) << out_;
 }
 
 TEST_F(SweepCommandTest, AnUnknownMethodInTheGridIsAnInvalidScenario) {
-  EXPECT_EQ(Run({"--methods", "gp,newton"}), kExitInvalidInput);
+  EXPECT_EQ(Run({"--methods", "gp,newton"}), cli::ExitCode::kInvalidInput);
   EXPECT_NE(err_.find("\"newton\""), std::string::npos) << err_;
   EXPECT_NE(err_.find("dpc sweep: --methods: "), std::string::npos) << "names the sweep flag: " << err_;
   EXPECT_TRUE(out_.empty()) << out_;
 }
 
 TEST_F(SweepCommandTest, BadDeviceAxesAreAnInvalidScenario) {
-  EXPECT_EQ(Run({"--devices", "131,14"}), kExitInvalidInput);
+  EXPECT_EQ(Run({"--devices", "131,14"}), cli::ExitCode::kInvalidInput);
   EXPECT_NE(err_.find("'4'"), std::string::npos) << err_;
   EXPECT_NE(err_.find("dpc sweep: --devices: "), std::string::npos) << "names the sweep flag: " << err_;
   EXPECT_TRUE(out_.empty()) << out_;
 }
 
 TEST_F(SweepCommandTest, AnInvalidFlagValueIsRejectedBeforeAnythingRuns) {
-  EXPECT_EQ(Run({"--step", "-1", "--rates", "1e3"}), kExitInvalidInput);
+  EXPECT_EQ(Run({"--step", "-1", "--rates", "1e3"}), cli::ExitCode::kInvalidInput);
   EXPECT_NE(err_.find("dpc sweep: invalid scenario: controller.step: "), std::string::npos)
       << err_;
   EXPECT_NE(err_.find("(set by --step)"), std::string::npos) << err_;
@@ -245,7 +245,7 @@ TEST_F(SweepCommandTest, AnInvalidFlagValueIsRejectedBeforeAnythingRuns) {
 TEST_F(SweepCommandTest, AnInvalidCombinationIsRejectedBeforeAnythingRuns) {
   // inverse needs a square task: 3 controls for a point target, not 4.
   EXPECT_EQ(Run({"--devices", "131,3131", "--methods", "inverse", "--rates", "1e3"}),
-            kExitInvalidInput);
+            cli::ExitCode::kInvalidInput);
   EXPECT_NE(err_.find("controller.method"), std::string::npos) << err_;
   EXPECT_NE(err_.find("3131"), std::string::npos) << "names the run: " << err_;
   EXPECT_TRUE(out_.empty()) << out_;
@@ -254,7 +254,7 @@ TEST_F(SweepCommandTest, AnInvalidCombinationIsRejectedBeforeAnythingRuns) {
 TEST_F(SweepCommandTest, AScenarioWarningIsPrintedOnceForTheWholeGrid) {
   // A measured loop with the paper's 1 us delay is unstable above step 0.0317: every run of the
   // grid shares that problem, and the user hears about it once.
-  EXPECT_EQ(Run({"--loop", "measured", "--step", "0.1", "--rates", "1e3,1e4"}), kExitOk);
+  EXPECT_EQ(Run({"--loop", "measured", "--step", "0.1", "--rates", "1e3,1e4"}), cli::ExitCode::kOk);
   size_t count = 0;
   for (size_t at = err_.find("dpc sweep: warning: "); at != std::string::npos;
        at = err_.find("dpc sweep: warning: ", at + 1)) {
@@ -266,19 +266,19 @@ TEST_F(SweepCommandTest, AScenarioWarningIsPrintedOnceForTheWholeGrid) {
 }
 
 TEST_F(SweepCommandTest, AStableScenarioPrintsNoWarning) {
-  EXPECT_EQ(Run({"--rates", "1e3"}), kExitOk);
+  EXPECT_EQ(Run({"--rates", "1e3"}), cli::ExitCode::kOk);
   EXPECT_EQ(err_.find("warning"), std::string::npos) << err_;
 }
 
 TEST_F(SweepCommandTest, AnUnwritableCsvIsARuntimeError) {
   EXPECT_EQ(Run({"--rates", "1e3", "--csv", PathIn("missing_directory/s.csv")}),
-            kExitRuntimeError);
+            cli::ExitCode::kRuntimeError);
   EXPECT_NE(err_.find("missing_directory/s.csv"), std::string::npos) << err_;
 }
 
 TEST_F(SweepCommandTest, AnUnwritablePlotIsARuntimeError) {
   EXPECT_EQ(Run({"--rates", "1e3", "--plot", PathIn("missing_directory/s.png")}),
-            kExitRuntimeError);
+            cli::ExitCode::kRuntimeError);
   EXPECT_NE(err_.find("missing_directory"), std::string::npos) << err_;
 }
 

@@ -1,12 +1,13 @@
-#include "json_report.h"
+#include "dpc/cli/run_report.h"
 
 #include <fmt/format.h>
 
 #include <cmath>
 
+#include "dpc/config/scenario_validation.h"
 #include "dpc/control/control_law_factory.h"
 
-namespace dpc::tools {
+namespace dpc::cli {
 namespace {
 
 nlohmann::ordered_json Number(double value) {
@@ -61,12 +62,23 @@ double InputRateRadPerS(const ScenarioConfig& scenario) {
   return NAN;
 }
 
-nlohmann::ordered_json RunSettingsJson(const ClosedLoopSimulator& simulator) {
-  const ScenarioConfig& s = simulator.scenario();
+RunDescription DescribeRun(const ScenarioConfig& scenario, const WaveplateChain& chain, const Target& target,
+                           std::string loop_kernel) {
+  return RunDescription{scenario, chain.Describe(), chain.control_count(), target.Describe(),
+                        DelaySamples(scenario.simulation), std::move(loop_kernel)};
+}
+
+RunDescription DescribeRun(const ClosedLoopSimulator& simulator) {
+  return DescribeRun(simulator.scenario(), simulator.chain(), simulator.target(),
+                     simulator.uses_fast_path() ? "fast" : "general");
+}
+
+nlohmann::ordered_json RunSettingsJson(const RunDescription& run) {
+  const ScenarioConfig& s = run.scenario;
   nlohmann::ordered_json j;
   j["scenario"] = s.name;
-  j["stages"] = simulator.chain().Describe();
-  j["controls"] = simulator.chain().control_count();
+  j["stages"] = run.device;
+  j["controls"] = run.controls;
   j["method"] = std::string(MethodName(s.controller.method));
   j["loop"] = s.controller.loop == LoopMode::kModel ? "model" : "measured";
   j["step"] = s.controller.step;
@@ -77,24 +89,23 @@ nlohmann::ordered_json RunSettingsJson(const ClosedLoopSimulator& simulator) {
                                  : nlohmann::ordered_json(nullptr);
   j["range_criterion"] = s.controller.nullspace_criterion == NullspaceCriterion::kRange;
   j["curvature_correction"] = s.controller.curvature_correction;
-  j["target"] = simulator.target().Describe();
+  j["target"] = run.target;
   j["rate_rad_per_s"] = Number(InputRateRadPerS(s));
   j["sample_rate_hz"] = s.simulation.sample_rate_hz;
   j["delay_s"] = s.simulation.delay_s;
-  j["delay_samples"] = simulator.delay_samples();
+  j["delay_samples"] = run.delay_samples;
   j["duration_s"] = s.simulation.duration_s;
   j["activation_s"] = s.controller.activation_s;
   j["polarimeter_noise_deg"] = s.simulation.polarimeter_noise_deg;
   j["seed"] = s.simulation.seed;
-  j["loop_kernel"] = simulator.uses_fast_path() ? "fast" : "general";
+  j["loop_kernel"] = run.loop_kernel;
   return j;
 }
 
-nlohmann::ordered_json RunReportJson(const ClosedLoopSimulator& simulator,
-                                     const SimulationResult& result,
+nlohmann::ordered_json RunReportJson(const RunDescription& run, const SimulationResult& result,
                                      const std::vector<std::string>& warnings) {
   const RunSummary& r = result.summary;
-  nlohmann::ordered_json j = RunSettingsJson(simulator);
+  nlohmann::ordered_json j = RunSettingsJson(run);
   j["samples"] = r.samples;
   j["samples_per_s"] = Number(result.samples_per_s);
   j["wall_time_s"] = Number(result.wall_time_s);
@@ -105,7 +116,7 @@ nlohmann::ordered_json RunReportJson(const ClosedLoopSimulator& simulator,
                     {"max", Number(r.error_deg.max)}};
   j["extinction_db_mean"] = Number(r.extinction_db_mean);
   j["extinction_db_power_mean"] = Number(r.extinction_db_power_mean);
-  j["lock_threshold_deg"] = simulator.scenario().simulation.lock_threshold_deg;
+  j["lock_threshold_deg"] = run.scenario.simulation.lock_threshold_deg;
   j["lock_time_s"] = Optional(r.lock_time_s);
   j["first_lock_time_s"] = Optional(r.first_lock_time_s);
   j["excursions"] = r.excursions;
@@ -130,12 +141,12 @@ nlohmann::ordered_json RunReportJson(const ClosedLoopSimulator& simulator,
   return j;
 }
 
-std::string RunReportText(const ClosedLoopSimulator& simulator, const SimulationResult& result) {
-  const ScenarioConfig& s = simulator.scenario();
+std::string RunReportText(const RunDescription& run, const SimulationResult& result) {
+  const ScenarioConfig& s = run.scenario;
   const RunSummary& r = result.summary;
   std::string text;
   text += fmt::format("scenario   {} — {} ({} controls), {} loop, method {}, step {:g}",
-                      s.name, simulator.chain().Describe(), simulator.chain().control_count(),
+                      s.name, run.device, run.controls,
                       s.controller.loop == LoopMode::kModel ? "model" : "measured",
                       MethodName(s.controller.method), s.controller.step);
   if (s.controller.method == ControlMethod::kGradientProjection ||
@@ -146,15 +157,13 @@ std::string RunReportText(const ClosedLoopSimulator& simulator, const Simulation
   if (const std::string options = OptionsText(s.controller); !options.empty()) {
     text += "\noptions    " + options;
   }
-  text += fmt::format("\ninput      {:.4g} rad/s, target {}\n", InputRateRadPerS(s),
-                      simulator.target().Describe());
+  text += fmt::format("\ninput      {:.4g} rad/s, target {}\n", InputRateRadPerS(s), run.target);
   text += fmt::format("run        {} samples at {:.4g} MHz, delay {} samples, control from {:.4g} ms"
                       "{}\n",
-                      r.samples, s.simulation.sample_rate_hz / 1e6, simulator.delay_samples(),
+                      r.samples, s.simulation.sample_rate_hz / 1e6, run.delay_samples,
                       s.controller.activation_s * 1e3, result.stopped_early ? " (stopped early)" : "");
   text += fmt::format("speed      {:.3g} M samples/s ({:.3g} s, {} loop)\n",
-                      result.samples_per_s / 1e6, result.wall_time_s,
-                      simulator.uses_fast_path() ? "fast" : "general");
+                      result.samples_per_s / 1e6, result.wall_time_s, run.loop_kernel);
   text += fmt::format("lock       {} (first below {:g}° after {}, {} excursions)\n",
                       FormatOptional(r.lock_time_s, 1e3, "ms after activation"),
                       s.simulation.lock_threshold_deg, FormatOptional(r.first_lock_time_s, 1e3, "ms"),
@@ -178,4 +187,4 @@ std::string RunReportText(const ClosedLoopSimulator& simulator, const Simulation
   return text;
 }
 
-}  // namespace dpc::tools
+}  // namespace dpc::cli

@@ -1,10 +1,10 @@
-#include "scenario_overrides.h"
+#include "dpc/cli/scenario_overrides.h"
 
 #include <fmt/format.h>
 
 #include "dpc/config/scenario_error.h"
 
-namespace dpc::tools {
+namespace dpc::cli {
 
 void ScenarioOverrides::AddTo(CLI::App& app) {
   app.add_option("--stages-axes", stages_axes,
@@ -232,4 +232,4 @@ std::optional<std::string> ScenarioOverrides::FlagForField(const std::string& fi
   return std::nullopt;
 }
 
-}  // namespace dpc::tools
+}  // namespace dpc::cli

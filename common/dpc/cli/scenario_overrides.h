@@ -36,7 +36,7 @@
 
 #include "dpc/config/scenario_config.h"
 
-namespace dpc::tools {
+namespace dpc::cli {
 
 struct ScenarioOverrides {
   std::optional<std::string> stages_axes;
@@ -70,4 +70,4 @@ struct ScenarioOverrides {
   mutable std::map<std::string, std::string> field_to_flag_;
 };
 
-}  // namespace dpc::tools
+}  // namespace dpc::cli

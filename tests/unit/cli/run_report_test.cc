@@ -1,4 +1,4 @@
-#include "json_report.h"
+#include "dpc/cli/run_report.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace dpc::tools {
+namespace dpc::cli {
 namespace {
 
 constexpr double kTolerance = 1e-15;
@@ -39,7 +39,7 @@ class JsonReportTest : public ::testing::Test {
   nlohmann::ordered_json Report(const std::vector<std::string>& warnings = {}) {
     ClosedLoopSimulator simulator(scenario_);
     const SimulationResult result = simulator.Run();
-    return RunReportJson(simulator, result, warnings);
+    return RunReportJson(DescribeRun(simulator), result, warnings);
   }
 
   ScenarioConfig scenario_;
@@ -49,7 +49,7 @@ TEST_F(JsonReportTest, SettingsDescribeTheRun) {
   scenario_.simulation.seed = 17;
   scenario_.simulation.polarimeter_noise_deg = 0.25;
   const ClosedLoopSimulator simulator(scenario_);
-  const nlohmann::ordered_json j = RunSettingsJson(simulator);
+  const nlohmann::ordered_json j = RunSettingsJson(DescribeRun(simulator));
   for (const char* key : kSettingsFields) EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j.size(), std::size(kSettingsFields));
   EXPECT_EQ(j["scenario"], "paper-131");
@@ -77,7 +77,7 @@ TEST_F(JsonReportTest, SettingsNameTheGeneralLoopAndTheMeasuredMode) {
   scenario_.controller.loop = LoopMode::kMeasured;
   const ClosedLoopSimulator simulator(scenario_);
   ASSERT_FALSE(simulator.uses_fast_path());
-  const nlohmann::ordered_json j = RunSettingsJson(simulator);
+  const nlohmann::ordered_json j = RunSettingsJson(DescribeRun(simulator));
   EXPECT_EQ(j["method"], "transpose");
   EXPECT_EQ(j["loop"], "measured");
   EXPECT_EQ(j["loop_kernel"], "general");
@@ -102,7 +102,7 @@ TEST_F(JsonReportTest, ReportHasEveryReadmeFieldAndTheSettings) {
 TEST_F(JsonReportTest, ReportCarriesTheResults) {
   ClosedLoopSimulator simulator(scenario_);
   const SimulationResult result = simulator.Run();
-  const nlohmann::ordered_json j = RunReportJson(simulator, result, {});
+  const nlohmann::ordered_json j = RunReportJson(DescribeRun(simulator), result, {});
   const RunSummary& r = result.summary;
   EXPECT_EQ(j["samples"], 10000);
   EXPECT_EQ(j["samples"], r.samples);
@@ -204,7 +204,7 @@ TEST(InputRateRadPerSTest, NaNWithoutOne) {
 TEST_F(JsonReportTest, TextNamesScenarioMethodAndLoop) {
   scenario_.name = "text-check";
   ClosedLoopSimulator simulator(scenario_);
-  const std::string text = RunReportText(simulator, simulator.Run());
+  const std::string text = RunReportText(DescribeRun(simulator), simulator.Run());
   EXPECT_NE(text.find("text-check"), std::string::npos) << text;
   EXPECT_NE(text.find("method gp"), std::string::npos) << text;
   EXPECT_NE(text.find("model loop"), std::string::npos) << text;
@@ -223,7 +223,7 @@ TEST_F(JsonReportTest, TextNamesTheGeneralLoopAndANeverLockingRun) {
     return MakeControlLaw(config, timing, controls, point);  // a user factory: always the general loop
   });
   ASSERT_FALSE(simulator.uses_fast_path());
-  const std::string text = RunReportText(simulator, simulator.Run());
+  const std::string text = RunReportText(DescribeRun(simulator), simulator.Run());
   EXPECT_NE(text.find("method pinv"), std::string::npos) << text;
   EXPECT_NE(text.find("measured loop"), std::string::npos) << text;
   EXPECT_NE(text.find("general loop"), std::string::npos) << text;
@@ -232,4 +232,4 @@ TEST_F(JsonReportTest, TextNamesTheGeneralLoopAndANeverLockingRun) {
 }
 
 }  // namespace
-}  // namespace dpc::tools
+}  // namespace dpc::cli

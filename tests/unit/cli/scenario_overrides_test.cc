@@ -1,4 +1,4 @@
-#include "scenario_overrides.h"
+#include "dpc/cli/scenario_overrides.h"
 
 #include <CLI/CLI.hpp>
 #include <gtest/gtest.h>
@@ -10,7 +10,7 @@
 
 #include "dpc/config/scenario_error.h"
 
-namespace dpc::tools {
+namespace dpc::cli {
 namespace {
 
 constexpr double kTolerance = 1e-15;
@@ -367,4 +367,4 @@ TEST_F(ScenarioOverridesTest, ApplyingAgainGivesTheSameResult) {
 }
 
 }  // namespace
-}  // namespace dpc::tools
+}  // namespace dpc::cli

@@ -1,14 +1,14 @@
-#include "scenario_loading.h"
+#include "dpc/cli/scenario_loading.h"
 
 #include <fmt/format.h>
 
 #include "dpc/scenario_io/scenario_text.h"
 
-namespace dpc::tools {
+namespace dpc::cli {
 
-ScenarioConfig LoadScenarioWithOverrides(const std::string& path,
-                                         const ScenarioOverrides& overrides) {
-  ScenarioConfig scenario = path.empty() ? PaperScenario("131") : ReadScenarioFile(path);
+ScenarioConfig LoadScenarioWithOverrides(const std::string& path, const ScenarioOverrides& overrides,
+                                         const ScenarioConfig& when_no_file) {
+  ScenarioConfig scenario = path.empty() ? when_no_file : ReadScenarioFile(path);
   overrides.Apply(&scenario);
   return scenario;
 }
@@ -21,4 +21,4 @@ std::string DescribeScenarioError(const ScenarioError& error, const ScenarioOver
   return text;
 }
 
-}  // namespace dpc::tools
+}  // namespace dpc::cli

@@ -1,4 +1,4 @@
-#include "scenario_loading.h"
+#include "dpc/cli/scenario_loading.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -9,7 +9,7 @@
 
 #include "dpc/config/scenario_validation.h"
 
-namespace dpc::tools {
+namespace dpc::cli {
 namespace {
 
 constexpr double kTolerance = 1e-15;
@@ -34,7 +34,7 @@ class ScenarioLoadingTest : public ::testing::Test {
   // if it does not throw.
   std::string DescribedLoadError(const std::string& path) {
     try {
-      LoadScenarioWithOverrides(path, overrides_);
+      LoadScenarioWithOverrides(path, overrides_, PaperScenario("131"));
     } catch (const ScenarioError& e) {
       return DescribeScenarioError(e, overrides_);
     }
@@ -46,7 +46,7 @@ class ScenarioLoadingTest : public ::testing::Test {
 };
 
 TEST_F(ScenarioLoadingTest, EmptyPathGivesThePaperScenario) {
-  const ScenarioConfig scenario = LoadScenarioWithOverrides("", overrides_);
+  const ScenarioConfig scenario = LoadScenarioWithOverrides("", overrides_, PaperScenario("131"));
   EXPECT_EQ(scenario.name, "paper-131");
   ASSERT_EQ(scenario.stages.size(), 3u);
   EXPECT_NEAR((scenario.stages[0].axis - Vector3::UnitX()).norm(), 0.0, kTolerance);
@@ -60,7 +60,7 @@ TEST_F(ScenarioLoadingTest, EmptyPathGivesThePaperScenario) {
 TEST_F(ScenarioLoadingTest, OverridesApplyToThePaperScenario) {
   overrides_.step = 0.25;
   overrides_.stages_axes = "3131";
-  const ScenarioConfig scenario = LoadScenarioWithOverrides("", overrides_);
+  const ScenarioConfig scenario = LoadScenarioWithOverrides("", overrides_, PaperScenario("131"));
   EXPECT_NEAR(scenario.controller.step, 0.25, kTolerance);
   EXPECT_EQ(scenario.stages.size(), 4u);
 }
@@ -68,7 +68,7 @@ TEST_F(ScenarioLoadingTest, OverridesApplyToThePaperScenario) {
 TEST_F(ScenarioLoadingTest, FilePathLoadsTheFile) {
   overrides_.duration_s = 1e-3;
   const ScenarioConfig scenario = LoadScenarioWithOverrides(
-      std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/paper_fig4.pbtxt", overrides_);
+      std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/paper_fig4.pbtxt", overrides_, PaperScenario("131"));
   EXPECT_EQ(scenario.name, "paper-fig4");
   ASSERT_EQ(scenario.stages.size(), 4u);
   EXPECT_EQ(scenario.stages[0].name, "wp1");
@@ -81,7 +81,7 @@ TEST_F(ScenarioLoadingTest, FileValuesAreNotValidatedOnLoad) {
   const std::string path = WriteScenario(
       "bad_step.pbtxt", "name: \"bad\"\nstages { axis: S1 }\ncontroller { step: -1 }\n");
   ScenarioConfig scenario;
-  ASSERT_NO_THROW(scenario = LoadScenarioWithOverrides(path, overrides_));
+  ASSERT_NO_THROW(scenario = LoadScenarioWithOverrides(path, overrides_, PaperScenario("131")));
   EXPECT_EQ(scenario.name, "bad");
   EXPECT_NEAR(scenario.controller.step, -1.0, kTolerance);
   // It is caught later, when the scenario is validated.
@@ -91,7 +91,7 @@ TEST_F(ScenarioLoadingTest, FileValuesAreNotValidatedOnLoad) {
 TEST_F(ScenarioLoadingTest, OverriddenValuesAreNotValidatedOnLoad) {
   overrides_.step = -2.0;
   ScenarioConfig scenario;
-  ASSERT_NO_THROW(scenario = LoadScenarioWithOverrides("", overrides_));
+  ASSERT_NO_THROW(scenario = LoadScenarioWithOverrides("", overrides_, PaperScenario("131")));
   EXPECT_NEAR(scenario.controller.step, -2.0, kTolerance);
 }
 
@@ -103,18 +103,18 @@ TEST_F(ScenarioLoadingTest, SyntaxErrorsThrowAtTheFilePosition) {
 }
 
 TEST_F(ScenarioLoadingTest, MissingFileThrowsScenarioError) {
-  EXPECT_THROW(LoadScenarioWithOverrides((directory_ / "missing.pbtxt").string(), overrides_),
+  EXPECT_THROW(LoadScenarioWithOverrides((directory_ / "missing.pbtxt").string(), overrides_, PaperScenario("131")),
                ScenarioError);
 }
 
 TEST_F(ScenarioLoadingTest, OverridesThatCannotBeStoredThrow) {
   overrides_.method = "newton";
-  EXPECT_THROW(LoadScenarioWithOverrides("", overrides_), ScenarioError);
+  EXPECT_THROW(LoadScenarioWithOverrides("", overrides_, PaperScenario("131")), ScenarioError);
 }
 
 TEST_F(ScenarioLoadingTest, DescriptionNamesTheFlagThatSetTheField) {
   overrides_.step = -1.0;
-  const ScenarioConfig scenario = LoadScenarioWithOverrides("", overrides_);
+  const ScenarioConfig scenario = LoadScenarioWithOverrides("", overrides_, PaperScenario("131"));
   try {
     ValidateScenario(scenario);
     FAIL() << "a negative step validated";
@@ -127,7 +127,7 @@ TEST_F(ScenarioLoadingTest, DescriptionNamesTheFlagThatSetTheField) {
 
 TEST_F(ScenarioLoadingTest, DescriptionNamesTheFlagForAPathInsideTheField) {
   overrides_.stages_axes = "13";
-  LoadScenarioWithOverrides("", overrides_);
+  LoadScenarioWithOverrides("", overrides_, PaperScenario("131"));
   const ScenarioError error("stages[1].axis_vector", "zero-length axis");
   EXPECT_EQ(DescribeScenarioError(error, overrides_),
             "invalid scenario: stages[1].axis_vector: zero-length axis (set by --stages-axes)");
@@ -135,7 +135,7 @@ TEST_F(ScenarioLoadingTest, DescriptionNamesTheFlagForAPathInsideTheField) {
 
 TEST_F(ScenarioLoadingTest, DescriptionOfAFieldNoFlagSetHasNoFlag) {
   overrides_.step = 0.2;
-  LoadScenarioWithOverrides("", overrides_);
+  LoadScenarioWithOverrides("", overrides_, PaperScenario("131"));
   const ScenarioError error("controller.damping", "-1 is negative");
   EXPECT_EQ(DescribeScenarioError(error, overrides_),
             "invalid scenario: controller.damping: -1 is negative");
@@ -144,7 +144,7 @@ TEST_F(ScenarioLoadingTest, DescriptionOfAFieldNoFlagSetHasNoFlag) {
 TEST_F(ScenarioLoadingTest, DescriptionOfAFileValueHasNoFlag) {
   const std::string path =
       WriteScenario("bad_step.pbtxt", "stages { axis: S1 }\ncontroller { step: -1 }\n");
-  const ScenarioConfig scenario = LoadScenarioWithOverrides(path, overrides_);
+  const ScenarioConfig scenario = LoadScenarioWithOverrides(path, overrides_, PaperScenario("131"));
   try {
     ValidateScenario(scenario);
     FAIL() << "a negative step validated";
@@ -154,4 +154,4 @@ TEST_F(ScenarioLoadingTest, DescriptionOfAFileValueHasNoFlag) {
 }
 
 }  // namespace
-}  // namespace dpc::tools
+}  // namespace dpc::cli
