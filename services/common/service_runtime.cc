@@ -1,8 +1,5 @@
 #include "service_runtime.h"
 
-#include <csignal>
-#include <ctime>
-
 #include <spdlog/sinks/stdout_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -45,6 +42,7 @@ std::string DescribeError(const ScenarioError& error, const CommonOptions& optio
 }
 
 void SetUpLogging(const std::string& service, const CommonOptions& options) {
+  spdlog::drop(service);  // set up again (a test runs several services in one process)
   auto logger = spdlog::stderr_logger_mt(service);
   logger->set_pattern(fmt::format("%H:%M:%S.%e [{} {}] %^%l%$: %v", service, options.bench_id));
   logger->set_level(spdlog::level::from_str(options.log_level));
@@ -57,28 +55,6 @@ void RejectionLog::Update(uint64_t count, const std::string& last_reason) {
     spdlog::warn("{} #{}: {}", what_, count, last_reason);
   }
   reported_ = count;
-}
-
-ShutdownSignals::ShutdownSignals() {
-  sigset_t set;
-  sigemptyset(&set);
-  sigaddset(&set, SIGINT);
-  sigaddset(&set, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &set, nullptr);
-  std::signal(SIGPIPE, SIG_IGN);
-}
-
-bool ShutdownSignals::Wait(std::chrono::milliseconds timeout) {
-  if (signal_ != 0) return true;
-  sigset_t set;
-  sigemptyset(&set);
-  sigaddset(&set, SIGINT);
-  sigaddset(&set, SIGTERM);
-  const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(timeout).count();
-  timespec ts{static_cast<time_t>(ns / 1000000000), static_cast<long>(ns % 1000000000)};
-  const int s = sigtimedwait(&set, nullptr, &ts);
-  if (s > 0) signal_ = s;
-  return signal_ != 0;
 }
 
 }  // namespace dpc::services

@@ -1,9 +1,9 @@
 #pragma once
-// What every bench service shares: the common command-line options (--domain, --bench-id, the
-// scenario file), the scenario (a file or the embedded default), clean shutdown on SIGINT and
-// SIGTERM, and logging.
+// What every bench service shares besides its skeleton (service.h): the common command-line
+// options (--domain, --bench-id, the scenario file and the `dpc sim` override flags), the
+// scenario (a file or the embedded default), logging, and rate-limited reports of rejected
+// input.
 
-#include <chrono>
 #include <cstdint>
 #include <string>
 
@@ -54,21 +54,6 @@ class RejectionLog {
  private:
   std::string what_;
   uint64_t reported_ = 0;
-};
-
-/// SIGINT and SIGTERM as a request to stop. Construct on the main thread before any other
-/// thread starts (Fast DDS's included): the signals are blocked in every thread and collected
-/// by Wait. SIGPIPE is ignored.
-class ShutdownSignals {
- public:
-  ShutdownSignals();
-  /// Waits up to `timeout` for SIGINT/SIGTERM; true once one has arrived (then always true).
-  bool Wait(std::chrono::milliseconds timeout);
-  bool requested() const { return signal_ != 0; }
-  int signal() const { return signal_; }
-
- private:
-  int signal_ = 0;
 };
 
 }  // namespace dpc::services

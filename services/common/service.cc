@@ -1,0 +1,67 @@
+#include "service.h"
+
+#include <csignal>
+
+namespace dpc::services {
+namespace {
+
+/// SIGINT and SIGTERM stop the service; SIGUSR1 (sent by the watcher's destructor to its own
+/// thread) ends the watcher.
+sigset_t WatchedSignals() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  sigaddset(&set, SIGUSR1);
+  return set;
+}
+
+}  // namespace
+
+void Service::stop() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (stopped_.exchange(true)) return;
+  }
+  stop_requested_.notify_all();
+  OnStop();
+}
+
+bool Service::WaitForStopUntil(std::chrono::steady_clock::time_point deadline) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  return stop_requested_.wait_until(lock, deadline, [this] { return stopped(); });
+}
+
+SignalWatcher::SignalWatcher() {
+  const sigset_t set = WatchedSignals();
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+  thread_ = std::thread([this] { Loop(); });
+}
+
+SignalWatcher::~SignalWatcher() {
+  quitting_ = true;
+  pthread_kill(thread_.native_handle(), SIGUSR1);
+  thread_.join();
+}
+
+void SignalWatcher::Watch(Service* service) {
+  service_ = service;
+  if (signal_.load() != 0) service->stop();
+}
+
+void SignalWatcher::Loop() {
+  const sigset_t set = WatchedSignals();
+  for (;;) {
+    int signal = 0;
+    if (sigwait(&set, &signal) != 0) continue;
+    if (signal == SIGUSR1) {
+      if (quitting_.load()) return;
+      continue;  // someone else's SIGUSR1: not ours to act on
+    }
+    signal_ = signal;
+    if (Service* service = service_.load()) service->stop();
+  }
+}
+
+}  // namespace dpc::services

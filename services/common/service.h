@@ -1,0 +1,143 @@
+#pragma once
+// The skeleton every bench service shares, after the Fast DDS examples and Fast DDS Spy: a
+// service is a class whose constructor builds everything (scenario, participant, writers,
+// readers) and throws on any failure, whose run() does the work until stop() or until the work
+// ends, and whose stop() wakes run() at once (a condition variable, not a polling loop).
+// ServiceMain is the whole main() of a service: options, logging, construction, signals, run,
+// and the exit code (cli::ExitCode):
+//
+//   bad command line                     kInvalidInput (2), the parser's message
+//   invalid scenario or configuration    kInvalidInput (2), the field (and the flag that set it)
+//   cannot start (DDS, device, profiles) kInitializationError (4)
+//   failed while running                 kRuntimeError (1)
+//   SIGINT / SIGTERM                     stop() at once; run() ends cleanly: kOk (0)
+//
+// SIGINT and SIGTERM are blocked in every thread (before Fast DDS starts its own) and taken by
+// one watcher thread (sigwait), which calls stop(): docker stops containers with SIGTERM.
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <pthread.h>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "dpc/cli/exit_code.h"
+#include "dpc/config/scenario_error.h"
+#include "service_runtime.h"
+
+namespace dpc::services {
+
+/// A configuration a service refuses that is not a scenario field (an option that contradicts
+/// the scenario, say): exit code kInvalidInput.
+class ConfigurationError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
+class Service {
+ public:
+  virtual ~Service() = default;
+  Service(const Service&) = delete;
+  Service& operator=(const Service&) = delete;
+
+  /// Works until stop() or the end of the work; returns the exit code.
+  virtual cli::ExitCode run() = 0;
+
+  /// Thread-safe; wakes run() (and whatever OnStop wakes) at once. Idempotent.
+  void stop();
+  bool stopped() const { return stopped_.load(std::memory_order_relaxed); }
+
+ protected:
+  Service() = default;
+  /// Waits until stop() or `deadline` (steady clock); true if stopped.
+  bool WaitForStopUntil(std::chrono::steady_clock::time_point deadline);
+  bool WaitForStopFor(std::chrono::nanoseconds timeout) {
+    return WaitForStopUntil(std::chrono::steady_clock::now() + timeout);
+  }
+  /// Called once by stop(), after the flag is set: wake waits of the service's own.
+  virtual void OnStop() {}
+
+ private:
+  std::atomic<bool> stopped_{false};
+  std::mutex mutex_;
+  std::condition_variable stop_requested_;
+};
+
+/// Blocks SIGINT, SIGTERM and SIGPIPE in the calling thread and every thread it starts after;
+/// a watcher thread takes SIGINT and SIGTERM and calls the service's stop(). Construct on the
+/// main thread before any other thread starts (Fast DDS's included).
+class SignalWatcher {
+ public:
+  SignalWatcher();
+  ~SignalWatcher();
+  SignalWatcher(const SignalWatcher&) = delete;
+  SignalWatcher& operator=(const SignalWatcher&) = delete;
+
+  /// From now on a signal stops `service`; one that came before stops it at once.
+  void Watch(Service* service);
+  /// The signal that arrived (0: none).
+  int signal() const { return signal_.load(); }
+
+ private:
+  void Loop();
+
+  std::atomic<Service*> service_{nullptr};
+  std::atomic<int> signal_{0};
+  std::atomic<bool> quitting_{false};
+  std::thread thread_;
+};
+
+/// The main() of service S. S provides:
+///   struct Options;                                   its own options, with defaults
+///   static void AddOptions(CLI::App&, Options*);
+///   static std::string LogName(const Options&);        "driver", "controller main", …
+///   S(const CommonOptions&, const Options&);           builds everything; throws
+///   cli::ExitCode run();                               (Service)
+template <typename S>
+int ServiceMain(int argc, char** argv, const std::string& description) {
+  SignalWatcher signals;
+  CLI::App app{description};
+  CommonOptions common;
+  AddCommonOptions(app, &common);
+  typename S::Options options;
+  S::AddOptions(app, &options);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return cli::ToInt(app.exit(e) == 0 ? cli::ExitCode::kOk : cli::ExitCode::kInvalidInput);
+  }
+  SetUpLogging(S::LogName(options), common);
+  std::unique_ptr<S> service;
+  try {
+    service = std::make_unique<S>(common, options);
+  } catch (const ScenarioError& e) {
+    spdlog::error("{}", DescribeError(e, common));
+    return cli::ToInt(cli::ExitCode::kInvalidInput);
+  } catch (const ConfigurationError& e) {
+    spdlog::error("invalid configuration: {}", e.what());
+    return cli::ToInt(cli::ExitCode::kInvalidInput);
+  } catch (const std::exception& e) {
+    spdlog::error("cannot start: {}", e.what());
+    return cli::ToInt(cli::ExitCode::kInitializationError);
+  }
+  signals.Watch(service.get());
+  cli::ExitCode code;
+  try {
+    code = service->run();
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    code = cli::ExitCode::kRuntimeError;
+  }
+  if (signals.signal() != 0) spdlog::info("stopped on signal {}", signals.signal());
+  service.reset();  // entities before participant, before the watcher goes
+  return cli::ToInt(code);
+}
+
+}  // namespace dpc::services

@@ -1,0 +1,133 @@
+#include "dds_bench_link.h"
+
+#include <chrono>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "dpc/bench/clock.h"
+#include "dpc/bus/message_conversion.h"
+
+namespace dpc::services {
+
+DdsBenchLink::DdsBenchLink(bus::BusParticipant* participant, int control_count, const std::string& bench_id,
+                           double lockstep_timeout_s, double latency_warmup_s)
+    : bench_id_(bench_id),
+      control_count_(control_count),
+      lockstep_timeout_s_(lockstep_timeout_s),
+      latest_(WaveplateMotion::Still(ControlVector::Zero(control_count))),
+      latency_(WallClockNs() + static_cast<int64_t>(latency_warmup_s * 1e9)) {
+  writer_ = participant->MakeWriter<msg::StokesSample>();
+  states_ = participant->MakeReader<msg::WaveplateState>(
+      bench_id, [this](const msg::WaveplateState& state, const auto&) { OnState(state); });
+  targets_ = participant->MakeReader<msg::Target>(
+      bench_id, [this](const msg::Target& target, const auto&) { OnTarget(target); });
+}
+
+DdsBenchLink::~DdsBenchLink() {
+  states_.reset();
+  targets_.reset();
+}
+
+void DdsBenchLink::Publish(const BenchSample& sample) {
+  bus::WriteSample(sample, bench_id_, &sample_message_);
+  writer_->Write(sample_message_);
+}
+
+void DdsBenchLink::Stop() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopped_ = true;
+  }
+  answered_.notify_all();
+}
+
+std::optional<ControlVector> DdsBenchLink::AwaitAnswer(const BenchSample& sample, std::string* why) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  awaited_ = sample.sequence;
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                            std::chrono::duration<double>(lockstep_timeout_s_));
+  while (!answer_) {
+    if (stopped_) {
+      *why = "stopped by signal";
+      return std::nullopt;
+    }
+    // Re-publish now and then: the first samples go out before a controller has matched.
+    if (answered_.wait_for(lock, std::chrono::milliseconds(100)) == std::cv_status::timeout && !answer_ &&
+        !stopped_) {
+      if (std::chrono::steady_clock::now() > deadline) {
+        *why = fmt::format("no state answered sample {} within {} s (is a driver and a "
+                           "controller running on this domain and bench id?)",
+                           sample.sequence, lockstep_timeout_s_);
+        return std::nullopt;
+      }
+      lock.unlock();
+      BenchSample again = sample;
+      again.publish_time_ns = WallClockNs();
+      Publish(again);
+      lock.lock();
+    }
+  }
+  ControlVector phi = std::move(*answer_);
+  answer_.reset();
+  return phi;
+}
+
+bool DdsBenchLink::TakeApplied(WaveplateMotion* motion) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!latest_fresh_) return false;
+  *motion = latest_;  // ControlVector has fixed storage: copying allocates nothing
+  latest_fresh_ = false;
+  return true;
+}
+
+std::optional<TargetConfig> DdsBenchLink::TargetChange() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::optional<TargetConfig> change;
+  change.swap(target_change_);
+  return change;
+}
+
+uint64_t DdsBenchLink::rejected_states() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return rejected_states_;
+}
+
+nlohmann::ordered_json DdsBenchLink::LoopLatencyJson() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return latency_.Json();
+}
+
+void DdsBenchLink::OnState(const msg::WaveplateState& message) {
+  const int64_t receive_wall_ns = WallClockNs();
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (std::string reason = bus::ReadState(message, control_count_, &state_); !reason.empty()) {
+    rejections_.Update(++rejected_states_, reason);
+    return;
+  }
+  latency_.OnState(state_, receive_wall_ns);
+  // One value per control: latest_ keeps its size, nothing allocates.
+  latest_ = state_.motion;
+  latest_fresh_ = true;
+  if (awaited_ != 0 && state_.answers_sample == awaited_) {
+    answer_ = latest_.phi;  // lockstep: the point (lockstep controllers send no rate)
+    awaited_ = 0;
+    answered_.notify_one();
+  }
+}
+
+void DdsBenchLink::OnTarget(const msg::Target& message) {
+  BenchTarget target;
+  if (std::string reason = bus::ReadTarget(message, &target); !reason.empty()) {
+    spdlog::warn("rejected target revision {}: {}", message.revision(), reason);
+    return;
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (target.revision > target_revision_) {
+    target_revision_ = target.revision;
+    target_change_ = target.target;
+  }
+}
+
+}  // namespace dpc::services

@@ -1,0 +1,69 @@
+#pragma once
+// The simulated bench's view of the bus (BenchLink over Fast DDS): publishes the samples,
+// collects the driver's states (checked at this edge, bus::ReadState) and the target.
+
+#include <atomic>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "bench_core.h"
+#include "dpc/bus/bus_participant.h"
+#include "loop_latency.h"
+#include "service_runtime.h"
+
+namespace dpc::services {
+
+class DdsBenchLink final : public BenchLink {
+ public:
+  /// Lockstep: gives up on a sample no state answers within `lockstep_timeout_s`. The loop
+  /// latency counts samples published from `latency_warmup_s` on.
+  DdsBenchLink(bus::BusParticipant* participant, int control_count, const std::string& bench_id,
+               double lockstep_timeout_s, double latency_warmup_s);
+  ~DdsBenchLink() override;
+
+  void Publish(const BenchSample& sample) override;
+  std::optional<ControlVector> AwaitAnswer(const BenchSample& sample, std::string* why) override;
+  bool TakeApplied(WaveplateMotion* motion) override;
+  std::optional<TargetConfig> TargetChange() override;
+  bool stop_requested() override { return stopped_.load(std::memory_order_relaxed); }
+
+  /// Thread-safe: the bench stops at its next sample; a lockstep wait ends at once.
+  void Stop();
+
+  uint64_t rejected_states() const;
+  /// The loop latency seen in the states so far (see LoopLatencyRecorder).
+  nlohmann::ordered_json LoopLatencyJson();
+  const bus::ReaderCounters& state_counters() const { return states_->counters(); }
+
+ private:
+  void OnState(const msg::WaveplateState& message);
+  void OnTarget(const msg::Target& message);
+
+  std::string bench_id_;
+  int control_count_;
+  double lockstep_timeout_s_;
+  std::atomic<bool> stopped_{false};
+  msg::StokesSample sample_message_;  ///< written in place (Publish runs on the bench's thread)
+  std::unique_ptr<bus::Writer<msg::StokesSample>> writer_;
+  std::unique_ptr<bus::Reader<msg::WaveplateState>> states_;
+  std::unique_ptr<bus::Reader<msg::Target>> targets_;
+  mutable std::mutex mutex_;
+  std::condition_variable answered_;
+  uint64_t awaited_ = 0;
+  std::optional<ControlVector> answer_;
+  WaveplateMotion latest_;      ///< the latest valid state's motion (one value per control)
+  DriverState state_;           ///< read into in place, under mutex_
+  bool latest_fresh_ = false;   ///< latest_ arrived since the last TakeApplied
+  std::optional<TargetConfig> target_change_;
+  uint64_t target_revision_ = 1;  // revision 1 is the scenario's target, the bench's own
+  uint64_t rejected_states_ = 0;
+  LoopLatencyRecorder latency_;  ///< this run's samples, after the warm-up
+  RejectionLog rejections_{"rejected state"};
+};
+
+}  // namespace dpc::services
