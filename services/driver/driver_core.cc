@@ -12,9 +12,6 @@
 namespace dpc::services {
 namespace {
 
-constexpr double kIntervalSmoothing = 0.05;   ///< weight of a new interval in the average
-constexpr size_t kMaxControllers = 64;        ///< records kept; the longest-silent is dropped
-
 /// a + b, saturated at the ends of int64 (a command's times are not trusted to be sane).
 int64_t SaturatingAdd(int64_t a, int64_t b) {
   int64_t sum;
@@ -36,6 +33,7 @@ DriverCore::DriverCore(std::vector<StageConfig> stages, DriverSettings settings,
     : chain_(BuildChain(stages)),
       settings_(std::move(settings)),
       backend_(backend),
+      arbiter_(ControllerArbiter::Settings{settings_.min_silence_s, settings_.silence_intervals}),
       applied_(backend->Applied()) {
   if (applied_.rate_per_s.size() != applied_.phi.size()) {
     applied_.rate_per_s = ControlVector::Zero(applied_.phi.size());
@@ -59,92 +57,12 @@ DriverCore::DriverCore(std::vector<StageConfig> stages, DriverSettings settings,
   }
   max_slew_per_s_ = settings_.max_slew_per_s > 0.0 ? std::min(settings_.max_slew_per_s, device.max_slew_per_s)
                                                      : device.max_slew_per_s;
-  reason_ = "holding: no controller yet";
-}
-
-int64_t DriverCore::SilenceTimeoutNs(const ControllerRecord& record) const {
-  const double floor_ns = settings_.min_silence_s * 1e9;
-  return static_cast<int64_t>(std::max(floor_ns, settings_.silence_intervals * record.mean_interval_ns));
-}
-
-DriverCore::Liveness DriverCore::Judge(const ControllerRecord& record, int64_t now_ns) const {
-  if (record.commands == 0) return Liveness::kSilent;
-  const int64_t timeout_ns = SilenceTimeoutNs(record);
-  if (now_ns - record.last_command_ns <= timeout_ns) return Liveness::kAlive;
-  if (Lag(record) == 0) return Liveness::kSilent;
-  // Silent, and others answered newer samples: dead, unless they only just started again
-  // (after a stall of the bench or of this driver, whoever's queued command comes first).
-  return now_ns - BehindSinceNs(record) > BehindGraceNs(record) ? Liveness::kBehind : Liveness::kAlive;
-}
-
-int64_t DriverCore::BehindGraceNs(const ControllerRecord& record) const {
-  return std::max<int64_t>(SilenceTimeoutNs(record) / 4, static_cast<int64_t>(4.0 * record.mean_interval_ns));
-}
-
-int64_t DriverCore::BehindSinceNs(const ControllerRecord& record) const {
-  const uint64_t missed = record.last_answered + 1;
-  const FirstAnswer& entry = first_answers_[missed % kAnswerRing];
-  return entry.sample == missed ? entry.time_ns : std::numeric_limits<int64_t>::min() / 2;
-}
-
-// A candidate to obey: not behind, and heard from within its timeout.
-bool DriverCore::Alive(const ControllerRecord& record, int64_t now_ns) const {
-  return Judge(record, now_ns) == Liveness::kAlive &&
-         now_ns - record.last_command_ns <= SilenceTimeoutNs(record);
-}
-
-std::string DriverCore::DescribeBehind(const std::string& id, const ControllerRecord& record,
-                                       int64_t now_ns) const {
-  return fmt::format("{} silent for {:.2f} ms, {} samples behind", id,
-                     static_cast<double>(now_ns - record.last_command_ns) * 1e-6, Lag(record));
-}
-
-void DriverCore::NoteAnswer(ControllerRecord* record, uint64_t answers_sample, int64_t now_ns) {
-  record->last_answered = std::max(record->last_answered, answers_sample);
-  if (answers_sample <= newest_answered_) return;
-  // Samples answered for the first time (usually one; after a gap, every one skipped). At most
-  // the ring's worth, counted down from the newest: bounded work and no counter that can wrap,
-  // whatever number a command carries.
-  const uint64_t fresh = std::min<uint64_t>(answers_sample - newest_answered_, kAnswerRing);
-  for (uint64_t i = 0; i < fresh; ++i) {
-    const uint64_t sample = answers_sample - i;
-    first_answers_[sample % kAnswerRing] = FirstAnswer{sample, now_ns};
-  }
-  newest_answered_ = answers_sample;
 }
 
 bool DriverCore::OnSample(uint64_t sequence, int64_t sample_time_ns, int64_t publish_time_ns) {
   if (!timeline_.OnSample(sequence, sample_time_ns, publish_time_ns)) return false;
-  // A new bench run numbers its samples from 1 again: nobody is behind.
-  newest_answered_ = 0;
-  for (auto& [id, record] : controllers_) record.last_answered = 0;
-  first_answers_.fill(FirstAnswer{});
+  arbiter_.OnBenchRestart();  // a new bench run numbers its samples from 1 again
   return true;
-}
-
-std::string DriverCore::BestAlive(int64_t now_ns, const std::string& excluded) const {
-  std::string best;
-  int32_t best_priority = 0;
-  for (const auto& [id, record] : controllers_) {
-    if (id == excluded || !Alive(record, now_ns)) continue;
-    if (best.empty() || record.priority > best_priority) {
-      best = id;
-      best_priority = record.priority;
-    }
-  }
-  return best;
-}
-
-void DriverCore::Obey(const std::string& id, const std::string& reason) {
-  if (id != obeyed_) ++switches_;
-  obeyed_ = id;
-  reason_ = reason;
-}
-
-void DriverCore::Hold(const std::string& reason) {
-  obeyed_.clear();
-  reason_ = reason;
-  StopMotion();
 }
 
 void DriverCore::StopMotion() {
@@ -170,7 +88,7 @@ std::optional<DriverState> DriverCore::OnMalformedCommand(const std::string& con
                                                           uint64_t answers_sample, const std::string& reason,
                                                           int64_t wall_ns) {
   Reject(controller_id, reason);
-  if (controller_id != obeyed_ || !timeline_.CheckSequence(answers_sample).empty()) {
+  if (controller_id != arbiter_.obeyed() || !timeline_.CheckSequence(answers_sample).empty()) {
     return std::nullopt;
   }
   // The obeyed controller's bad command: keep φ, but answer the sample (a lockstep bench waits
@@ -190,57 +108,14 @@ std::optional<DriverState> DriverCore::OnCommand(const ControllerCommand& comman
     return std::nullopt;
   }
 
-  // Liveness and priority of this controller.
-  auto found = controllers_.find(id);
-  if (found == controllers_.end()) {
-    if (controllers_.size() >= kMaxControllers) {
-      auto oldest = std::min_element(controllers_.begin(), controllers_.end(),
-                                     [](const auto& a, const auto& b) {
-                                       return a.second.last_command_ns < b.second.last_command_ns;
-                                     });
-      if (oldest->first != obeyed_) controllers_.erase(oldest);
-    }
-    found = controllers_.emplace(id, ControllerRecord{}).first;
-  }
-  ControllerRecord& record = found->second;
-  if (record.commands > 0) {
-    const double interval = static_cast<double>(now_ns - record.last_command_ns);
-    record.mean_interval_ns = record.commands == 1
-                                  ? interval
-                                  : (1.0 - kIntervalSmoothing) * record.mean_interval_ns +
-                                        kIntervalSmoothing * interval;
-  }
-  record.priority = command.priority;
-  record.last_command_ns = now_ns;
-  ++record.commands;
-  NoteAnswer(&record, command.answers_sample, now_ns);
-
-  if (id != obeyed_) {
-    // The controller in charge: the obeyed one, or while holding after a general silence the
-    // one obeyed before it, which keeps its place unless it fell behind.
-    const std::string& holder = obeyed_.empty() ? suspended_ : obeyed_;
-    const auto current = holder == id ? controllers_.end() : controllers_.find(holder);
-    // Judged by the others' answers, not by the time since its last command alone: after a
-    // stall of this driver or of the bench, a standby's queued command may come first.
-    const bool current_alive =
-        current != controllers_.end() &&
-        (obeyed_.empty() ? Judge(current->second, now_ns) != Liveness::kBehind
-                         : Judge(current->second, now_ns) == Liveness::kAlive);
-    if (current_alive && current->second.priority >= record.priority) {
-      if (!obeyed_.empty()) return std::nullopt;
-      // Holding for the suspended controller: answer the sample (a lockstep bench waits for
-      // it), apply nothing.
+  switch (arbiter_.OnCommand(id, command.priority, command.answers_sample, now_ns)) {
+    case ControllerArbiter::Verdict::kIgnore:
+      return std::nullopt;
+    case ControllerArbiter::Verdict::kAnswerOnly:
       Answer(command.answers_sample, wall_ns);
       return Publishable(wall_ns);
-    }
-    std::string reason = fmt::format("obeying {} (priority {})", id, record.priority);
-    if (current_alive) {
-      reason = fmt::format("obeying {} (priority {} over {})", id, record.priority, holder);
-    } else if (current != controllers_.end()) {
-      reason += ": " + DescribeBehind(holder, current->second, now_ns);
-    }
-    suspended_.clear();
-    Obey(id, reason);
+    case ControllerArbiter::Verdict::kObey:
+      break;
   }
 
   // Apply: clamp to the ranges, then limit the slew over the driver's own time since the last
@@ -287,7 +162,8 @@ std::optional<DriverState> DriverCore::OnCommand(const ControllerCommand& comman
   motion.moving = moving && motion.end_ns > start_ns;
   if (std::string failure = backend_->Apply(motion); !failure.empty()) {
     Reject(id, fmt::format("backend {} failed: {}", backend_->name(), failure));
-    Hold(fmt::format("holding: backend {} failed: {}", backend_->name(), failure));
+    arbiter_.Hold(fmt::format("holding: backend {} failed: {}", backend_->name(), failure));
+    StopMotion();
     return Publishable(wall_ns);
   }
   applied_ = backend_->Applied();
@@ -300,29 +176,11 @@ std::optional<DriverState> DriverCore::OnCommand(const ControllerCommand& comman
 }
 
 std::optional<DriverState> DriverCore::Tick(int64_t now_ns, int64_t wall_ns) {
-  if (!obeyed_.empty()) {
-    const ControllerRecord& record = controllers_.at(obeyed_);
-    const Liveness liveness = Judge(record, now_ns);
-    if (liveness == Liveness::kAlive) return std::nullopt;
-    const std::string silent = obeyed_;
+  if (!arbiter_.holding()) {
+    if (!arbiter_.Check(now_ns)) return std::nullopt;
+    // The obeyed controller fell silent: another one is obeyed, or the driver holds.
     saturated_.fill(false);
-    if (liveness == Liveness::kSilent) {
-      const double silent_ms = static_cast<double>(now_ns - record.last_command_ns) * 1e-6;
-      // Nobody answered anything newer: no samples, or the whole machine stalled. Not this
-      // controller's failure: hold, and give it back control first when commands resume.
-      Hold(fmt::format("holding: {} silent for {:.2f} ms and no other controller answered newer samples; "
-                       "{} gets control back first",
-                       silent, silent_ms, silent));
-      suspended_ = silent;
-      return Publishable(wall_ns);
-    }
-    const std::string next = BestAlive(now_ns, silent);
-    const std::string behind = DescribeBehind(silent, record, now_ns);
-    if (!next.empty()) {
-      Obey(next, fmt::format("obeying {} (priority {}): {}", next, controllers_.at(next).priority, behind));
-    } else {
-      Hold(fmt::format("holding: {}, no other controller", behind));
-    }
+    if (arbiter_.holding()) StopMotion();
     return Publishable(wall_ns);
   }
   // Holding: a controller that became alive is obeyed on its next command; the heartbeat keeps
@@ -335,12 +193,7 @@ std::optional<DriverState> DriverCore::Tick(int64_t now_ns, int64_t wall_ns) {
 }
 
 int64_t DriverCore::NextTickNs() const {
-  if (!obeyed_.empty()) {
-    const ControllerRecord& record = controllers_.at(obeyed_);
-    const int64_t silent_due_ns = record.last_command_ns + SilenceTimeoutNs(record) + 1;
-    if (Lag(record) == 0) return silent_due_ns;
-    return std::max(silent_due_ns, BehindSinceNs(record) + BehindGraceNs(record) + 1);
-  }
+  if (!arbiter_.holding()) return arbiter_.NextCheckNs();
   return last_state_ns_ + static_cast<int64_t>(settings_.holding_state_period_s * 1e9);
 }
 
@@ -354,14 +207,14 @@ DriverState DriverCore::State(int64_t wall_ns) const {
   state.publish_time_ns = wall_ns;
   state.motion = applied_;
   state.saturated = saturated_;
-  state.mode = obeyed_.empty() ? DriverMode::kHolding : DriverMode::kActive;
-  state.reason = reason_;
-  state.obeyed_controller_id = obeyed_;
-  state.obeyed_priority = obeyed_.empty() ? 0 : controllers_.at(obeyed_).priority;
+  state.mode = arbiter_.holding() ? DriverMode::kHolding : DriverMode::kActive;
+  state.reason = arbiter_.reason();
+  state.obeyed_controller_id = arbiter_.obeyed();
+  state.obeyed_priority = arbiter_.obeyed_priority();
   state.commands_applied = applied_count_;
   state.commands_rejected = rejected_;
   state.commands_limited = limited_;
-  state.controller_switches = switches_;
+  state.controller_switches = arbiter_.switches();
   state.last_rejection = last_rejection_;
   return state;
 }

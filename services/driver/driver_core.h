@@ -2,26 +2,9 @@
 // The waveplate driver's logic, without DDS: which controller to obey, what to apply, what to
 // report. The DDS wiring (main.cc) calls it under one lock, with monotonic time in ns.
 //
-// Arbitration. Every controller publishes a command for every sample; the driver obeys exactly
-// one: the highest-priority controller that is alive (ties: the one already obeyed). Its
-// silence timeout is
-//   timeout = max(min_silence_s, silence_intervals × its mean command interval)
-// (the interval is an exponential average of its command arrivals). The obeyed controller is
-// judged by its silence and by the other controllers' answers (each command names the sample
-// it answers):
-//   - silent for its timeout while another controller answered a sample it has not (for
-//     longer than a grace: a quarter of the timeout, at least 4 command intervals): dead; the
-//     driver switches to the next alive controller, or holds. At 10 kHz a killed controller is
-//     noticed ~1.5 ms after its last command, where the DDS deadline (≥ 10 ms on Fast DDS 2.9)
-//     would take about ten times longer;
-//   - silent for its timeout and nobody answered anything newer: no samples, or the whole
-//     machine stalled; nobody's failure. The driver holds and gives it control back first:
-//     until it falls behind as above, another controller's command gets a holding answer
-//     (a lockstep bench still advances) instead of control. Without this, whichever command
-//     came first after a stall took over, and the primary took back over at once: on a loaded
-//     2-core VM at 10 kHz, 50 needless switches to the standby in 30 s, 25 with it at the same
-//     2-ms timeout, 30 at 1.5 ms (the default).
-// Tick() runs when the next such deadline is due (at most every 0.25 ms).
+// Which controller it obeys is the ControllerArbiter's decision (controller_arbiter.h): the
+// alive controller of highest priority, judged by its silence and the other controllers'
+// answers. Tick() runs when the arbiter's next deadline (or the holding heartbeat) is due.
 //
 // Every command is checked (its shape at the service's edge, bus::ReadCommand: stage count,
 // NaN/Inf, oversized; here against the driver's own record of the bench's samples,
@@ -54,6 +37,7 @@
 #include "dpc/bench/bench_messages.h"
 #include "dpc/config/scenario_config.h"
 #include "dpc/optics/waveplate_chain.h"
+#include "controller_arbiter.h"
 #include "sample_timeline.h"
 #include "waveplate_backend.h"
 
@@ -106,10 +90,10 @@ class DriverCore {
   /// sequence is one more than the previous published state's, starting at 1.
   DriverState Publishable(int64_t wall_ns);
 
-  const std::string& obeyed() const { return obeyed_; }
+  const std::string& obeyed() const { return arbiter_.obeyed(); }
   /// The newest sample the bench published, as far as the driver knows (0: none yet).
   uint64_t newest_sample() const { return timeline_.newest(); }
-  bool holding() const { return obeyed_.empty(); }
+  bool holding() const { return arbiter_.holding(); }
   int control_count() const { return chain_.control_count(); }
   /// The slew limit in force (the device's, or --max-slew-per-s if lower), φ units per second.
   double max_slew_per_s() const { return max_slew_per_s_; }
@@ -117,41 +101,6 @@ class DriverCore {
   const std::string& last_rejection() const { return last_rejection_; }
 
  private:
-  struct ControllerRecord {
-    int32_t priority = 0;
-    int64_t last_command_ns = 0;
-    double mean_interval_ns = 0.0;    ///< exponential average; 0 until two commands
-    uint64_t commands = 0;
-    uint64_t last_answered = 0;       ///< the newest sample it answered
-  };
-  /// Liveness, judged by its silence and the other controllers' answers. Silent for longer
-  /// than its timeout and: kBehind (dead), another controller answered a sample it has not
-  /// answered, longer ago than a grace (a quarter of the timeout, at least 4 command
-  /// intervals); kSilent, nobody answered anything newer (no samples, a stalled machine, or it
-  /// was the only controller). Otherwise kAlive.
-  enum class Liveness { kAlive, kBehind, kSilent };
-  Liveness Judge(const ControllerRecord& record, int64_t now_ns) const;
-  uint64_t Lag(const ControllerRecord& record) const { return newest_answered_ - record.last_answered; }
-  /// When another controller first answered the oldest sample `record` has not answered
-  /// (INT64_MIN if that is too long ago to remember). Only for Lag(record) > 0.
-  int64_t BehindSinceNs(const ControllerRecord& record) const;
-  int64_t BehindGraceNs(const ControllerRecord& record) const;
-  int64_t SilenceTimeoutNs(const ControllerRecord& record) const;
-  /// "<id> silent for X ms, N samples behind".
-  std::string DescribeBehind(const std::string& id, const ControllerRecord& record, int64_t now_ns) const;
-  bool Alive(const ControllerRecord& record, int64_t now_ns) const;
-  /// Notes the sample a command answers (one that passed SampleTimeline::CheckAnswer).
-  void NoteAnswer(ControllerRecord* record, uint64_t answers_sample, int64_t now_ns);
-  /// When each of the latest kAnswerRing samples was first answered, by any controller.
-  static constexpr size_t kAnswerRing = 1024;
-  struct FirstAnswer {
-    uint64_t sample = 0;
-    int64_t time_ns = 0;
-  };
-  /// The best alive controller other than `excluded`, or "" if none.
-  std::string BestAlive(int64_t now_ns, const std::string& excluded) const;
-  void Obey(const std::string& id, const std::string& reason);
-  void Hold(const std::string& reason);
   void Reject(const std::string& controller_id, const std::string& reason);
   /// The next state answers `sample` (its times from the record; the command's arrival at
   /// `wall_ns`).
@@ -165,15 +114,7 @@ class DriverCore {
   std::vector<ControlRange> ranges_;   ///< per control: the device's range ∩ the stage's
   SampleTimeline timeline_;            ///< the bench's samples, as the polarimeter published them
   double max_slew_per_s_ = 0.0;        ///< the device's limit, or the setting if lower
-  std::map<std::string, ControllerRecord> controllers_;
-
-  std::string obeyed_;               ///< "" while holding
-  /// While holding because no command came from anyone: the controller obeyed before; the
-  /// driver waits for it (others' commands get a holding answer) unless it falls behind.
-  std::string suspended_;
-  uint64_t newest_answered_ = 0;     ///< the newest sample any controller answered
-  std::array<FirstAnswer, kAnswerRing> first_answers_{};
-  std::string reason_;
+  ControllerArbiter arbiter_;
   WaveplateMotion applied_;         ///< what the backend does (its Applied())
   std::array<bool, kMaxControls> saturated_{};
   int64_t last_applied_ns_ = 0;       ///< the driver's clock when the last command was applied
@@ -187,7 +128,6 @@ class DriverCore {
   uint64_t applied_count_ = 0;
   uint64_t rejected_ = 0;
   uint64_t limited_ = 0;
-  uint64_t switches_ = 0;
   std::string last_rejection_;
 };
 

@@ -140,7 +140,7 @@ int64_t FailoverTime(DriverCore* core, std::optional<DriverState>* switch_state)
   return -1;
 }
 
-TEST_F(DriverCoreTest, FailsOverWhenTheStandbyAnsweredSamplesThePrimaryDidNotForTheSilenceTimeout) {
+TEST_F(DriverCoreTest, AFailoverIsPublishedAsAStateNamingTheNewController) {
   const int64_t last_primary = TwoControllersAnswer(&core_, 1, 50);
   ASSERT_EQ(core_.obeyed(), "primary");
   std::optional<DriverState> state;
@@ -157,17 +157,7 @@ TEST_F(DriverCoreTest, FailsOverWhenTheStandbyAnsweredSamplesThePrimaryDidNotFor
   EXPECT_NE(state->reason.find("samples behind"), std::string::npos) << state->reason;
 }
 
-TEST_F(DriverCoreTest, AStandbyOneSampleAheadAllTheTimeIsNoFailure) {
-  // At a high rate the standby may answer sample k + 1 before the primary's answer to k
-  // arrives: the primary is always "behind", never for long.
-  int64_t t = 0;
-  for (int k = 1; k <= 200; ++k, t += 100 * kUs) {
-    Send(core_, Command("standby", 0, {0.1, 0.1, 0.1}, k + 1), t, 0);
-    Send(core_, Command("primary", 10, {0.1, 0.1, 0.1}, k), t + 60 * kUs, 0);
-    EXPECT_FALSE(core_.Tick(t + 80 * kUs, 0).has_value());
-    ASSERT_EQ(core_.obeyed(), "primary") << "sample " << k;
-  }
-}
+
 
 TEST_F(DriverCoreTest, AStallOfEveryoneHoldsThenGivesControlBackToTheSameController) {
   // No samples for 5 ms (a stalled polarimeter, or the whole machine): nobody answers, so the
