@@ -3,7 +3,7 @@
 #include <spdlog/sinks/stdout_sinks.h>
 #include <spdlog/spdlog.h>
 
-#include "dpc/scenario_io/scenario_text.h"
+#include "dpc/scenario_io/scenario_reader.h"
 #include "dpc/cli/scenario_loading.h"
 
 namespace dpc::services {

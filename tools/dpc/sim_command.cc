@@ -9,7 +9,7 @@
 #include <memory>
 
 #include "dpc/config/scenario_error.h"
-#include "dpc/scenario_io/scenario_text.h"
+#include "dpc/scenario_io/scenario_writer.h"
 #include "dpc/sim/closed_loop_simulator.h"
 #include "dpc/sim/loop_stability.h"
 #include "dpc/sim/trace_writer.h"

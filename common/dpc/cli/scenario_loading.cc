@@ -2,7 +2,7 @@
 
 #include <fmt/format.h>
 
-#include "dpc/scenario_io/scenario_text.h"
+#include "dpc/scenario_io/scenario_file.h"
 
 namespace dpc::cli {
 

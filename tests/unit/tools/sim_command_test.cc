@@ -13,7 +13,7 @@
 #include <utility>
 #include <vector>
 
-#include "dpc/scenario_io/scenario_text.h"
+#include "dpc/scenario_io/scenario_reader.h"
 #include "dpc/cli/exit_code.h"
 
 namespace dpc::tools {

@@ -1,0 +1,50 @@
+#include "dpc/scenario_io/scenario_writer.h"
+
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "support/scenario_texts.h"
+
+namespace dpc {
+namespace {
+
+using ::testing::HasSubstr;
+using namespace dpc::testing;
+
+TEST(ScenarioWriterTest, PaperScenarioRoundTrips) {
+  const ScenarioConfig paper = PaperScenario("3131");
+  ExpectSameScenario(ScenarioFromProto(ScenarioToProto(paper)), paper);
+  ExpectSameScenario(FromText(ScenarioToText(paper)), paper);
+}
+
+TEST(ScenarioWriterTest, EveryFieldRoundTrips) {
+  for (const char* text : {kFixedAxisText, kAdjustableAxisText}) {
+    const ScenarioConfig config = FromText(text);
+    SCOPED_TRACE(config.name);
+    ExpectSameScenario(ScenarioFromProto(ScenarioToProto(config)), config);
+    ExpectSameScenario(FromText(ScenarioToText(config)), config);
+  }
+}
+
+TEST(ScenarioWriterTest, DoublesRoundTripExactly) {
+  ScenarioConfig config = PaperScenario("131");
+  config.controller.step = 0.1 + 0.2;
+  config.stages[0].map.rad_per_unit = 1.0 / 3.0;
+  config.stages[1].axis = Vector3(std::sqrt(2.0), -1e-300, 1e300);
+  config.simulation.statistics_start_s = std::nextafter(5e-3, 1.0);
+  ExpectSameScenario(FromText(ScenarioToText(config)), config);
+}
+
+TEST(ScenarioWriterTest, TextNamesElementalAxesByEnum) {
+  const std::string text = ScenarioToText(PaperScenario("131"));
+  EXPECT_THAT(text, HasSubstr("axis: S1"));
+  EXPECT_THAT(text, HasSubstr("axis: S3"));
+  EXPECT_THAT(text, HasSubstr("method: GP"));
+}
+
+}  // namespace
+}  // namespace dpc
