@@ -10,6 +10,12 @@
 // The sections are checked in the order simulation, stages, input, target, controller: the
 // later checks use the sample rate, the duration and the control count.
 //
+// Where each part lives (this is the one header for all of them): stages and maps in
+// device_validation.cc; controller, dither and options in controller_validation.cc;
+// simulation, input, target, the sample counts and ValidateScenario (with the RANGE rule, which
+// needs the stages) in scenario_validation.cc; the field checks and their wording, shared by
+// all, in field_checks.h.
+//
 // Rules, with fs = simulation.sample_rate_hz and dt = 1/fs:
 //   simulation   0 < fs ≤ 1e10 Hz; delay_s = k·dt with k a whole number (relative tolerance
 //                1e-6), 1 ≤ k ≤ 1e7 (a command cannot act on the sample it was computed from);
