@@ -1,0 +1,72 @@
+#pragma once
+// The shared harness of dpc_bus_benchmark: what every section needs (the domain, this binary,
+// the log directory, --quick), the percentile summaries it prints, and the launchers of the
+// bench's real services and of this binary's own internal modes. No globals: main() builds one
+// harness and passes it to each section.
+
+#include <cmath>
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "support/child_process.h"
+
+namespace dpc::bus_benchmark {
+
+using testing::ChildProcess;
+
+/// Percentiles of a series, in the series' unit (ns for every span in this binary); NAN when the
+/// series is empty.
+struct Percentiles {
+  double p50 = NAN, p99 = NAN, p999 = NAN, max = NAN;
+  size_t count = 0;
+};
+
+/// Nearest-rank percentiles of `values`.
+Percentiles Summarize(std::vector<double> values);
+
+/// "p50 … µs  p99 … µs  p99.9 … µs  (n = …)" of percentiles in ns.
+std::string Us(const Percentiles& p);
+
+/// One run of the benchmark, passed to every section.
+struct BusBenchmarkHarness {
+  int domain = 30;      ///< the bench's DDS domain (loopback profile); the raw references use RawDomain()
+  std::string self;     ///< this binary, re-executed for the far sides of the raw references
+  std::string log_dir;  ///< one log per child process (its stdout and stderr)
+  bool quick = false;   ///< short runs (~3 min in all) instead of the full ones (~20 min)
+
+  /// The harness of this run: logs in a fresh <tmp>/dpc_bus_benchmark_<pid>.
+  static BusBenchmarkHarness Create(int domain, bool quick);
+
+  /// The raw references' own domains (1: ping-pong, 2: chain): an echo must not answer the
+  /// bench's samples or another reference's.
+  int RawDomain(int which = 1) const;
+
+  /// <log_dir>/<name>.log
+  std::string LogPath(const std::string& name) const;
+
+  /// This binary in one of its internal modes (`args`, e.g. {"--pong", "--domain", "31"}),
+  /// logging to LogPath(log_name); ended (SIGINT, then SIGKILL) when the pointer goes.
+  std::unique_ptr<ChildProcess> StartSelf(std::vector<std::string> args, const std::string& log_name) const;
+};
+
+/// The bench's real services (dpc-driver, dpc-controller, dpc-polarimeter) on the harness's
+/// domain, each logging to <log_dir>/<service><log_suffix>.log; all stopped when this goes.
+class Services {
+ public:
+  explicit Services(const BusBenchmarkHarness& harness, std::string log_suffix = "")
+      : harness_(harness), log_suffix_(std::move(log_suffix)) {}
+  ChildProcess& Start(const std::string& binary, std::vector<std::string> args, const std::string& name);
+  ChildProcess& Driver();
+  ChildProcess& Controller(const std::string& id, int priority, std::vector<std::string> extra = {});
+  ChildProcess& Polarimeter(std::vector<std::string> args);
+  void StopAll() { processes_.clear(); }
+
+ private:
+  const BusBenchmarkHarness& harness_;
+  std::string log_suffix_;
+  std::vector<std::unique_ptr<ChildProcess>> processes_;
+};
+
+}  // namespace dpc::bus_benchmark

@@ -1,0 +1,93 @@
+// dpc_bus_benchmark: the bench's figures over Fast DDS (issue 3, item 10), each beside a raw
+// Fast DDS reference measured by the same harness in the same run. Starts the real services
+// (build/services/dpc-*) on a loopback domain of its own, prints figures, never asserts.
+//
+//   dpc_bus_benchmark            full run (~20 min: 60 s per rate, a 10-minute memory run)
+//   dpc_bus_benchmark --quick    the same figures from short runs (~3 min)
+//
+// Sections (one file each, see sections.h):
+//   raw      (alone) the raw references: a ping-pong, StokesSample out, WaveplateState back,
+//            the bench's QoS profiles, between two processes, one hop = round trip / 2; and a
+//            three-process chain, sample → relay (→ command) → echo (→ state), one hop =
+//            (sample → command at the echo) / 2; back to back and paced at 1 kHz
+//   loop     lockstep bench, then real time at 1 kHz: sample published → command received at
+//            the driver (two hops: polarimeter → controller → driver, plus the controller's
+//            update), → state published, → state back at the bench (the polarimeter's own
+//            report, bench.loop_latency_us); per hop = (sample → command at the driver) / 2;
+//            in rounds that alternate with both raw references (back to back for lockstep,
+//            paced at the same rate for real time), each on a domain of its own; medians over
+//            the rounds
+//   rate     real time at 5, 10, 15, 20 kHz: overruns and missed deadlines over the run; the
+//            raw references: samples paced at the same rate, echoed by a second process, and
+//            relayed through the three-process chain
+//   failover kill -9 of the obeyed controller with a standby: gap between the last command of
+//            the killed one and the first of the standby applied by the driver; the raw DDS
+//            reference: kill -9 of the stronger of two EXCLUSIVE-ownership writers
+//   tracking real time at 10 kHz, the scrambler (kicks per bench sample, and the paper's own
+//            diffusion) and a deterministic rotation at increasing
+//            rates: mean error without prediction, predicting across the latency, and with
+//            rate commands (--predict); the rate at which each crosses 1°
+//   memory   RSS of each service at the start and the end of a long 10 kHz run
+//
+// The raw references' far sides are this binary again, in the internal modes --pong, --relay,
+// --command-echo and --raw-owner.
+
+#include <cstdio>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include "harness.h"
+#include "raw_ownership.h"
+#include "raw_reference.h"
+#include "sections.h"
+
+int main(int argc, char** argv) {
+  namespace bench = dpc::bus_benchmark;
+  CLI::App app{"dpc_bus_benchmark: the bench's DDS figures beside raw Fast DDS references"};
+  bool quick = false, pong = false;
+  std::string only;
+  app.add_flag("--quick", quick, "Short runs (~3 min) instead of the full ones (~20 min)");
+  app.add_flag("--pong", pong, "(internal) the echo side of the raw ping-pong");
+  bool relay = false, command_echo = false;
+  app.add_flag("--relay", relay, "(internal) the middle of the raw chain: sample → command");
+  app.add_flag("--command-echo", command_echo, "(internal) the end of the raw chain: command → state");
+  int raw_owner = 0;
+  app.add_option("--raw-owner", raw_owner, "(internal) a raw EXCLUSIVE writer of this strength");
+  int domain = 30;
+  app.add_option("--domain", domain, "DDS domain (loopback profile)")->check(CLI::Range(0, 232));
+  app.add_option("--only", only, "One section: raw,loop,rate,failover,tracking,memory");
+  CLI11_PARSE(app, argc, argv);
+
+  // The internal modes: the far sides of the raw references, started by the sections.
+  if (pong) return bench::RunPong(domain);
+  if (relay) return bench::RunRelay(domain);
+  if (command_echo) return bench::RunCommandEcho(domain);
+  if (raw_owner > 0) return bench::RunRawOwner(domain, raw_owner, 10000.0);
+
+  const bench::BusBenchmarkHarness harness = bench::BusBenchmarkHarness::Create(domain, quick);
+  fmt::print("dpc_bus_benchmark: domain {}, logs in {}{}\n", harness.domain, harness.log_dir, quick ? " (quick)" : "");
+  auto want = [&](const char* section) { return only.empty() || only == section; };
+  // The raw references alone only on request; the loop section measures them beside the bench.
+  if (only == "raw") bench::RunRawSection(harness);
+  std::fflush(stdout);  // each section's figures as they come, also into a file or pipe
+  if (want("loop")) {
+    bench::RunLoopSection(harness);
+    std::fflush(stdout);
+  }
+  if (want("failover")) {
+    bench::RunFailoverSection(harness);
+    std::fflush(stdout);
+  }
+  if (want("tracking")) {
+    bench::RunTrackingSection(harness);
+    std::fflush(stdout);
+  }
+  if (want("rate")) {
+    bench::RunRateSection(harness);
+    std::fflush(stdout);
+  }
+  if (want("memory")) bench::RunMemorySection(harness);
+  return 0;
+}

@@ -1,0 +1,28 @@
+#pragma once
+// The sections of dpc_bus_benchmark, one file each: each prints its figures to stdout, takes
+// its run lengths from harness.quick and never asserts.
+
+#include "harness.h"
+
+namespace dpc::bus_benchmark {
+
+/// raw: the raw references alone, ping-pong and three-process chain, back to back and paced at
+/// 1 kHz (raw_section.cc).
+void RunRawSection(const BusBenchmarkHarness& harness);
+/// loop: the bench's loop latency, lockstep then real time at 1 kHz, in rounds beside both raw
+/// references (loop_section.cc).
+void RunLoopSection(const BusBenchmarkHarness& harness);
+/// rate: real time at 5 to 20 kHz, overruns and missed deadlines, beside raw paced references
+/// (rate_section.cc).
+void RunRateSection(const BusBenchmarkHarness& harness);
+/// failover: kill -9 of the obeyed controller with a standby, beside raw EXCLUSIVE ownership
+/// (failover_section.cc).
+void RunFailoverSection(const BusBenchmarkHarness& harness);
+/// tracking: mean error against the rotation rate, with and without prediction
+/// (tracking_section.cc).
+void RunTrackingSection(const BusBenchmarkHarness& harness);
+/// memory: RSS of each service at the start and the end of a long 10 kHz run
+/// (memory_section.cc).
+void RunMemorySection(const BusBenchmarkHarness& harness);
+
+}  // namespace dpc::bus_benchmark
