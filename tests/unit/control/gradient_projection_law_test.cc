@@ -20,7 +20,7 @@ class GradientProjectionLawTest : public ::testing::Test, public ControlFixture 
 };
 
 TEST_F(GradientProjectionLawTest, MatchesThePapersEquationWithSvd) {
-  // Paper eq. 12: Δφ = μ J⁺ΔS − μ_N (I − J⁺J) φ.
+  // Paper eq. 10: Δφ = μ J⁺ΔS − μ_N (I − J⁺J) φ.
   GradientProjectionLaw law(0.1, 0.05);
   for (int trial = 0; trial < 30; ++trial) {
     const ControlVector phi = RandomPhi(1.5);

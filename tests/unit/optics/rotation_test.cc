@@ -60,7 +60,7 @@ TEST_F(RotationTest, GeneralRotationIsOrthogonalAndFixesItsAxis) {
 }
 
 TEST_F(RotationTest, DerivativeIsCrossProductTimesRotation) {
-  // Paper eq. 10: dM/dθ = [r×] M.
+  // Paper eq. 8: dM/dθ = [r×] M.
   const double h = 1e-5;  // truncation h²/6 ≈ 2e-11, round-off ≈ ε·|θ|/h ≈ 2e-10
   for (int i = 0; i < 50; ++i) {
     const Vector3 r = RandomUnit();

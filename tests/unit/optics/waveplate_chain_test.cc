@@ -80,7 +80,7 @@ TEST_F(WaveplateChainTest, AxesStringListsStagesInLightOrder) {
 }
 
 TEST_F(WaveplateChainTest, PaperJacobianFormForThreeStages) {
-  // Paper eq. 9 with θ = kφ: J = k [M3M2(r1×S'), M3(r2×S''), r3×S'''].
+  // Paper eq. 7 with θ = kφ: J = k [M3M2(r1×S'), M3(r2×S''), r3×S'''].
   const double k = M_PI;
   const WaveplateChain chain = WaveplateChain::FromAxes("131", k);
   const ControlVector phi = RandomPhi(3);

@@ -1,8 +1,8 @@
 // The simulator against a plain, independent implementation of the paper's equations.
 //
 // The reference below is written the straightforward way: Mueller matrices as products of R1 /
-// R3 (paper section II), J column by column as in eq. 9 (output frame), J⁺ from a JacobiSVD,
-// gradient projection as eq. 12, φ[k+1] = φ[k] + Δφ (eq. 6), and a FIFO for the loop delay.
+// R3 (paper section II), J column by column as in eq. 7 (output frame), J⁺ from a JacobiSVD,
+// gradient projection as eq. 10, φ[k+1] = φ[k] + Δφ (eq. 6), and a FIFO for the loop delay.
 // It shares only the input SOP sequence with the simulator (same generator, same seed). The
 // optimized simulator (input-frame kinematics, incremental sines and cosines, reduced task,
 // closed-form pseudo-inverse, block-wise phases) must follow the same trajectory.
@@ -48,7 +48,7 @@ Matrix3 Mueller(const std::vector<int>& axes, const Eigen::VectorXd& phi) {
   return m;
 }
 
-// Paper eq. 9 generalized: J_i = π · (M_m ⋯ M_(i+1)) (r_i × S_i), S_i after stage i.
+// Paper eq. 7 generalized: J_i = π · (M_m ⋯ M_(i+1)) (r_i × S_i), S_i after stage i.
 Eigen::MatrixXd PaperJacobian(const std::vector<int>& axes, const Eigen::VectorXd& phi,
                               const StokesVector& s_in) {
   const int m = static_cast<int>(axes.size());

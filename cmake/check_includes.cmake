@@ -1,0 +1,16 @@
+# cmake -DRULE=… -DFORBIDDEN=<regex> -DFILES=<list> -DSTAMP=<file> -P check_includes.cmake
+# Fails, naming each file and line, if a file includes a header matching FORBIDDEN.
+set(offenders "")
+foreach(file IN LISTS FILES)
+  file(STRINGS ${file} includes REGEX "^[ \t]*#[ \t]*include")
+  foreach(line IN LISTS includes)
+    if(line MATCHES "${FORBIDDEN}")
+      string(STRIP "${line}" line)
+      string(APPEND offenders "\n  ${file}: ${line}")
+    endif()
+  endforeach()
+endforeach()
+if(offenders)
+  message(FATAL_ERROR "layering (${RULE}) broken:${offenders}")
+endif()
+file(WRITE ${STAMP} "ok\n")
