@@ -2,7 +2,7 @@
 // What a control law sees at one sample, and the reduction of the task to its true dimension.
 //
 // Closed loop (paper eq. 5–6): ΔS_out[k] = S* − S_out[k];  φ[k+1] = φ[k] + Δφ[k], with Δφ from
-// the linear model J Δφ = ΔS_out (paper eq. 4).
+// the linear model J Δφ = ΔS_out (paper eq. 3).
 //
 // Loop modes (which S_out enters the error):
 //   kModel     S_out = f(φ; S_in measured): the controller computes the output from the model

@@ -7,7 +7,7 @@
 // their input SOP (ControlProblem::s_in): the model output, the task Jacobian and the task error
 // e_k are all evaluated there, so every law and target works unchanged.
 //
-// Lead. The laws integrate with step μ < 1 (φ[k+1] = φ[k] + μ·J⁺e…, paper eq. 6, 12): against
+// Lead. The laws integrate with step μ < 1 (φ[k+1] = φ[k] + μ·J⁺e…, paper eqs. 6, 10): against
 // an aim that moves every sample such an integrator settles (1 − μ)/μ samples behind it. The
 // part of the error that is new this sample, the motion of the prediction
 //

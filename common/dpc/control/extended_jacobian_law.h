@@ -1,5 +1,5 @@
 #pragma once
-// The extended Jacobian method (paper section III.C, eq. 13–15; Chang 1987).
+// The extended Jacobian method (paper section III.C, eqs. 11–14; Chang 1987).
 //
 // Gradient projection only drifts towards min H = ½‖φ‖²; the extended Jacobian enforces the
 // optimality condition "∇H = φ has no component in null(J)" as extra equations and solves
@@ -9,7 +9,7 @@
 //
 // A is the task Jacobian (d × n), e the task error, Z (n × (n−d)) an orthonormal basis of
 // null(A) at the current φ, so the system is square (n × n). Keeping ∂g/∂φ (the paper's
-// eq. 14 with the second-order term) rather than dropping it (eq. 15) is what makes the
+// eq. 12 with the second-order term) rather than dropping it (eq. 13) is what makes the
 // solution converge to the constrained optimum; ∂g/∂φ is a central difference of g, which is a
 // smooth function of φ (the projector A⁺A does not depend on the tangent basis).
 //
@@ -18,7 +18,7 @@
 // singularities) the method applies to points as well. Its intended use is the 1-D target
 // n·S = c (paper's "special cases"), where A = nᵀJ is 1 × n.
 //
-// Real-time but not cheap: 2n extra chain evaluations per update (≈ 1 µs for 4 stages).
+// Real-time but not cheap: 2n extra chain evaluations per update.
 
 #include <Eigen/QR>
 

@@ -1,12 +1,12 @@
 #pragma once
-// Gradient projection (paper section III.B, eq. 12), the reset-free endless control law:
+// Gradient projection (paper section III.B, eqs. 9–10), the reset-free endless control law:
 //
 //   Δφ = μ J⁺ ΔS − μ_N (I − J⁺J) ∇H(φ),      H = ½‖φ‖² (the paper): ∇H = φ
 //
 // The task term (step μ) drives S_out to the target; the null-space term (step μ_N) moves φ
 // towards the minimum of H among the controls that give the same S_out, so φ stays bounded
 // while the input SOP rotates without end. (The paper writes the null-space term with "+μ" in
-// the text and "−" in eq. 12; it must be "−" to decrease H, as eq. 12 has it.)
+// the text and "−" in eqs. 9–10; it must be "−" to decrease H, as the equations have it.)
 //
 // Thresholded variant (paper Fig. 5, "gpt"): the null-space term runs only while some
 // |φ_i| > threshold; diagnostics().nullspace_active tells when it ran.

@@ -11,7 +11,7 @@
 // Transpose, pseudo-inverse and RLS work on the reduced task (control_problem.h), which gives
 // exactly the same Δφ as the 3-D formulas. Inverse and damped need the square matrix itself:
 // J (3 × 3, a point target with 3 controls) or nᵀJ (1 × 1, a set target with 1 control). Every
-// 3-stage J is singular (rank ≤ 2, its columns are ⊥ S_out; paper eq. 9), so the inverse law
+// 3-stage J is singular (rank ≤ 2, its columns are ⊥ S_out; paper eq. 7), so the inverse law
 // reports kSingular on every sample of a point-target run and applies nothing: the paper's point.
 // Gradient projection is in gradient_projection_law.h.
 

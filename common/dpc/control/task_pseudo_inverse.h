@@ -5,7 +5,7 @@
 // Both results are written through the rows b_i of a matrix B and a 2 × 2 matrix:
 //
 //   A⁺ e        = Bᵀ (S e)
-//   (I − A⁺A) v = v − Bᵀ (P (B v))              (projection onto null A, paper eq. 12)
+//   (I − A⁺A) v = v − Bᵀ (P (B v))              (projection onto null A, paper eq. 10)
 //
 // d = 2, well conditioned (det G > 1e-6·(tr G)², i.e. σ2/σ1 ≳ 1e-3, G = AAᵀ): the normal
 // equations, B = A and S = P = G⁻¹ (one division). With κ(G) < 1e6 the result is within ~1e-10
@@ -62,7 +62,7 @@ class TaskPseudoInverse {
   /// Real-time. out = (I − A⁺A) v.
   void NullSpaceProjection(const ControlVector& v, ControlVector* out) const;
 
-  /// Real-time. out = step·A⁺e − nullspace_step·(I − A⁺A)φ (paper eq. 12) in one pass:
+  /// Real-time. out = step·A⁺e − nullspace_step·(I − A⁺A)φ (paper eq. 10) in one pass:
   /// out = Bᵀ(step·S e + nullspace_step·P B φ) − nullspace_step·φ.
   void GradientProjectionStep(const TaskVector& e, const ControlVector& phi, double step,
                               double nullspace_step, ControlVector* out) const;

@@ -11,8 +11,6 @@
 // (RenormalizeNearUnit) keeps |S| = 1 to round-off over any number of samples. Call k of Next()
 // (0-based) returns S_in[k]; the first call returns the initial SOP and applies nothing.
 //
-// Measured cost (throwaway timing loop, -O3): ≈ 26 ns per Next() with the paper scrambler.
-//
 // Randomness: one RandomSource(seed, stream 1) shared by the disturbances in order, so a run is
 // reproducible from the seed, and adding polarimeter noise (stream 2) does not change the input.
 

@@ -19,9 +19,6 @@
 // averaged over the orbit; ≈ 9 mrad for the paper's numbers), against ω·dt·D = 0.1 rad of
 // deterministic rotation.
 //
-// Measured cost (throwaway timing loop, -O3, this 2-core box): ≈ 23 ns per Advance, of which
-// ≈ 6 ns is the normal draw.
-//
 // The disturbance is time-invariant (Advance ignores t_s). With kick_rms_ratio = 0 it draws
 // nothing and is the constant rotation alone.
 

@@ -3,7 +3,7 @@
 // normal and uniform variates and uniform directions.
 //
 // Engine: boost::random::mt19937_64. Normal variates: boost::random::normal_distribution
-// (a ziggurat, ~5 ns per draw). The engine seed is derived from (seed, stream) with SplitMix64
+// (a ziggurat). The engine seed is derived from (seed, stream) with SplitMix64
 // (Steele, Lea, Flood, OOPSLA 2014), so that the streams of one seed are independent and a run
 // is reproducible from the scenario seed alone:
 //

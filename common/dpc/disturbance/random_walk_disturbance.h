@@ -12,8 +12,7 @@
 //
 // D = 0 is allowed: the disturbance then does nothing and draws nothing.
 //
-// Measured cost (throwaway timing loop, -O3): ≈ 39 ns per Advance (three normal draws, a
-// square root, a division and the rotation).
+// Cost per Advance: three normal draws, a square root, a division and the rotation.
 
 #include <string>
 

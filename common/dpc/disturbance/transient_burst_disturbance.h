@@ -25,9 +25,6 @@
 // whatever its alignment with the sample grid, and a burst shorter than a sample still acts.
 // Outside bursts the SOP does not change and nothing is drawn.
 //
-// Measured cost (throwaway timing loop, -O3): ≈ 24 ns per sample inside a half-sine burst;
-// outside, ≈ 1.4 ns before the first burst and ≈ 12 ns between periodic bursts.
-//
 // Timing assumption: Advance is called with non-decreasing t (a random axis is redrawn when
 // the burst index changes).
 

@@ -3,9 +3,10 @@
 //
 // Forward kinematics (paper eq. 2):   S_out = f(φ; S_in) = M_m(φ_m) ⋯ M_1(φ_1) S_in.
 //
-// Closed-form Jacobian (paper eq. 9, J = ∂f/∂φ, 3 × n). Each stage is a product of elemental
-// rotations ("elements") e with unit axis r_e and angle θ_e = σ_e·θ_c(φ_c) (σ_e = ±1, c the
-// control driving it). With the dynamic-eigenstate rule dM/dθ = [r×] M (paper eq. 10):
+// Closed-form Jacobian (paper eq. 4: J = ∂f/∂φ, 3 × n; its form, eq. 7). Each stage is a
+// product of elemental rotations ("elements") e with unit axis r_e and angle θ_e = σ_e·θ_c(φ_c)
+// (σ_e = ±1, c the control driving it). With the dynamic-eigenstate rule dM/dθ = [r×] M
+// (paper eq. 8):
 //
 //   ∂S_out/∂θ_e = A_e (r_e × S_e) = (A_e r_e) × S_out,    A_e = M_last ⋯ M_(e+1)
 //
@@ -15,7 +16,7 @@
 //
 // Ω (3 × n) are the stages' axes carried to the output frame, scaled by dθ/dφ ("generators").
 // Every column of J is ⊥ S_out, so rank J ≤ 2 whatever m is. For the paper's 3-stage chain
-// this is exactly J = [M3M2(r1×S′), M3(r2×S″), r3×S‴].
+// this is exactly J = [M3M2(r1×S′), M3(r2×S″), r3×S‴] (paper eq. 7).
 //
 // The same in the input frame: with M = M_last ⋯ M_1 and B_e = M_e ⋯ M_1,
 //
@@ -96,7 +97,7 @@ class WaveplateChain {
   /// Real-time. S_out = f(φ; S_in) (paper eq. 2).
   StokesVector Output(const ChainPose& pose, const StokesVector& s_in) const;
 
-  /// Real-time. S_out, M and Ω′ in one forward pass; with_jacobian adds Ω and J (paper eq. 9).
+  /// Real-time. S_out, M and Ω′ in one forward pass; with_jacobian adds Ω and J (paper eqs. 4, 7).
   void Evaluate(const ChainPose& pose, const StokesVector& s_in, ChainKinematics* out,
                 bool with_jacobian = true) const;
 
