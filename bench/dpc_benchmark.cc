@@ -27,7 +27,7 @@ namespace {
 const Target kPaperTarget = Target::Point(StokesVector(0, 0.6, 0.8));
 
 // The baseline: gradient projection with J⁺ from a JacobiSVD of the full 3 × n Jacobian, as a
-// straightforward implementation of paper eq. 12 would do it.
+// straightforward implementation of paper eq. 10 would do it.
 class SvdGradientProjectionLaw final : public ControlLaw {
  public:
   SvdGradientProjectionLaw(double step, double nullspace_step)

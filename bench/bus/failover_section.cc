@@ -23,7 +23,7 @@
 namespace dpc::bus_benchmark {
 namespace {
 
-using testing::WaitUntil;
+using testing::Eventually;
 using namespace std::chrono_literals;
 
 /// Every WaveplateState of bench1 on the harness's domain, as the driver published it.
@@ -86,24 +86,24 @@ void RunFailoverSection(const BusBenchmarkHarness& harness) {
     StateLog log(harness.domain);
     Services services(harness, fmt::format("_failover{}", r + 1));
     services.Driver();
-    ChildProcess& primary = services.Controller("primary", 10);
+    Process& primary = services.Controller("primary", 10);
     services.Controller("standby", 0);
     services.Polarimeter({"--rate-hz", "10000"});
-    if (!WaitUntil([&] { return log.AppliedBy("primary") > 500; }, 30s)) {
+    if (!Eventually([&] { return log.AppliedBy("primary") > 500; }, 30s)) {
       fmt::print("  run {}: the primary did not take control\n", r + 1);
       continue;
     }
     // Both alive: every turn to the standby now is a needless one (and a turn back).
     const size_t from = log.Count();
     const auto both_since = std::chrono::steady_clock::now();
-    WaitUntil([&] { return log.AppliedBy("primary") > 5500; }, 30s);
+    Eventually([&] { return log.AppliedBy("primary") > 5500; }, 30s);
     const auto [turns, holds] = log.TurnsTo("standby", from);
     needless_switches += turns;
     needless_holds += holds;
     both_alive_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - both_since).count();
     primary.Signal(SIGKILL);
     const size_t before = log.AppliedBy("standby");
-    WaitUntil([&] { return log.AppliedBy("standby") > before + 1000; }, 10s);
+    Eventually([&] { return log.AppliedBy("standby") > before + 1000; }, 10s);
     std::lock_guard<std::mutex> lock(log.mutex);
     int64_t last_primary_ns = 0, first_standby_ns = 0;
     for (const auto& s : log.states) {

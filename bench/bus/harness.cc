@@ -50,28 +50,28 @@ int BusBenchmarkHarness::RawDomain(int which) const {
 
 std::string BusBenchmarkHarness::LogPath(const std::string& name) const { return log_dir + "/" + name + ".log"; }
 
-std::unique_ptr<ChildProcess> BusBenchmarkHarness::StartSelf(std::vector<std::string> args,
+std::unique_ptr<Process> BusBenchmarkHarness::StartSelf(std::vector<std::string> args,
                                                              const std::string& log_name) const {
   args.insert(args.begin(), self);
-  return std::make_unique<ChildProcess>(std::move(args), LogPath(log_name));
+  return std::make_unique<Process>(std::move(args), LogPath(log_name));
 }
 
-ChildProcess& Services::Start(const std::string& binary, std::vector<std::string> args, const std::string& name) {
+Process& Services::Start(const std::string& binary, std::vector<std::string> args, const std::string& name) {
   args.insert(args.begin(), binary);
   args.insert(args.end(), {"--domain", std::to_string(harness_.domain), "--log-level", "info"});
-  processes_.push_back(std::make_unique<ChildProcess>(args, harness_.LogPath(name + log_suffix_)));
+  processes_.push_back(std::make_unique<Process>(args, harness_.LogPath(name + log_suffix_)));
   return *processes_.back();
 }
 
-ChildProcess& Services::Driver() { return Start(DPC_DRIVER_BINARY, {}, "driver"); }
+Process& Services::Driver() { return Start(DPC_DRIVER_BINARY, {}, "driver"); }
 
-ChildProcess& Services::Controller(const std::string& id, int priority, std::vector<std::string> extra) {
+Process& Services::Controller(const std::string& id, int priority, std::vector<std::string> extra) {
   std::vector<std::string> args = {"--id", id, "--priority", std::to_string(priority)};
   args.insert(args.end(), extra.begin(), extra.end());
   return Start(DPC_CONTROLLER_BINARY, std::move(args), "controller_" + id);
 }
 
-ChildProcess& Services::Polarimeter(std::vector<std::string> args) {
+Process& Services::Polarimeter(std::vector<std::string> args) {
   return Start(DPC_POLARIMETER_BINARY, std::move(args), "polarimeter");
 }
 

@@ -10,11 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "support/child_process.h"
+#include "support/process.h"
 
 namespace dpc::bus_benchmark {
 
-using testing::ChildProcess;
+using testing::Process;
 
 /// Percentiles of a series, in the series' unit (ns for every span in this binary); NAN when the
 /// series is empty.
@@ -48,7 +48,7 @@ struct BusBenchmarkHarness {
 
   /// This binary in one of its internal modes (`args`, e.g. {"--pong", "--domain", "31"}),
   /// logging to LogPath(log_name); ended (SIGINT, then SIGKILL) when the pointer goes.
-  std::unique_ptr<ChildProcess> StartSelf(std::vector<std::string> args, const std::string& log_name) const;
+  std::unique_ptr<Process> StartSelf(std::vector<std::string> args, const std::string& log_name) const;
 };
 
 /// The bench's real services (dpc-driver, dpc-controller, dpc-polarimeter) on the harness's
@@ -57,16 +57,16 @@ class Services {
  public:
   explicit Services(const BusBenchmarkHarness& harness, std::string log_suffix = "")
       : harness_(harness), log_suffix_(std::move(log_suffix)) {}
-  ChildProcess& Start(const std::string& binary, std::vector<std::string> args, const std::string& name);
-  ChildProcess& Driver();
-  ChildProcess& Controller(const std::string& id, int priority, std::vector<std::string> extra = {});
-  ChildProcess& Polarimeter(std::vector<std::string> args);
+  Process& Start(const std::string& binary, std::vector<std::string> args, const std::string& name);
+  Process& Driver();
+  Process& Controller(const std::string& id, int priority, std::vector<std::string> extra = {});
+  Process& Polarimeter(std::vector<std::string> args);
   void StopAll() { processes_.clear(); }
 
  private:
   const BusBenchmarkHarness& harness_;
   std::string log_suffix_;
-  std::vector<std::unique_ptr<ChildProcess>> processes_;
+  std::vector<std::unique_ptr<Process>> processes_;
 };
 
 }  // namespace dpc::bus_benchmark

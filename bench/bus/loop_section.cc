@@ -70,7 +70,7 @@ void LoopLatency(const BusBenchmarkHarness& harness, int rounds, double seconds_
     Round result;
     auto run_bench = [&] {
       const std::string seconds = fmt::format("{}", seconds_per_round);
-      ChildProcess& polarimeter = services.Polarimeter(
+      Process& polarimeter = services.Polarimeter(
           lockstep ? std::vector<std::string>{"--lockstep", "--duration-s", seconds, "--json"}
                    : std::vector<std::string>{"--rate-hz", fmt::format("{}", rate_hz), "--run-s", seconds, "--json"});
       polarimeter.Wait(std::chrono::seconds(static_cast<int64_t>(600)));

@@ -34,9 +34,9 @@ void RunMemorySection(const BusBenchmarkHarness& harness) {
   const double seconds = harness.quick ? 60.0 : 600.0;
   fmt::print("memory at 10 kHz for {:.0f} s (goal: each service < 64 MB RSS, no growth)\n", seconds);
   Services services(harness);
-  ChildProcess& driver = services.Driver();
-  ChildProcess& controller = services.Controller("A", 0);
-  ChildProcess& polarimeter = services.Polarimeter({"--rate-hz", "10000"});
+  Process& driver = services.Driver();
+  Process& controller = services.Controller("A", 0);
+  Process& polarimeter = services.Polarimeter({"--rate-hz", "10000"});
   std::this_thread::sleep_for(10s);
   const double start_mb[3] = {RssMb(driver.pid()), RssMb(controller.pid()), RssMb(polarimeter.pid())};
   const auto end_time = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds - 10.0);

@@ -23,7 +23,7 @@ namespace dpc::bus_benchmark {
 namespace {
 
 using testing::LastJsonLine;
-using testing::WaitUntil;
+using testing::Eventually;
 using namespace std::chrono_literals;
 
 struct RawRateResult {
@@ -44,7 +44,7 @@ RawRateResult RawRate(const BusBenchmarkHarness& harness, double rate_hz, double
   auto reader = participant.MakeReader<msg::WaveplateState>("", [&](const msg::WaveplateState&, const auto&) {
     answers.fetch_add(1, std::memory_order_relaxed);
   });
-  WaitUntil([&] { return writer->matched_readers() > 0 && reader->counters().matched_writers.load() > 0; }, 20s);
+  Eventually([&] { return writer->matched_readers() > 0 && reader->counters().matched_writers.load() > 0; }, 20s);
   std::this_thread::sleep_for(200ms);
   prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
   msg::StokesSample sample;
@@ -86,12 +86,12 @@ void RunRateSection(const BusBenchmarkHarness& harness) {
     services.Driver();
     services.Controller("A", 0);
     std::this_thread::sleep_for(500ms);
-    ChildProcess& polarimeter = services.Polarimeter(
+    Process& polarimeter = services.Polarimeter(
         {"--rate-hz", fmt::format("{}", rate_hz), "--run-s", fmt::format("{}", seconds), "--json"});
     polarimeter.Wait(std::chrono::seconds(static_cast<int64_t>(seconds * 3 + 60)));
     const nlohmann::json r = LastJsonLine(polarimeter.Log());
     if (!r.is_object()) {
-      fmt::print("  {:6.0f} Hz: no report ({})\n", rate_hz, polarimeter.log_path());
+      fmt::print("  {:6.0f} Hz: no report ({})\n", rate_hz, polarimeter.out_path().string());
       continue;
     }
     const auto& b = r["bench"];

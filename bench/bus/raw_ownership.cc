@@ -20,7 +20,7 @@ namespace dpc::bus_benchmark {
 namespace {
 
 namespace fdds = eprosima::fastdds::dds;
-using testing::WaitUntil;
+using testing::Eventually;
 using namespace std::chrono_literals;
 
 constexpr char kOwnedTopic[] = "dpc_bench_owned";
@@ -106,9 +106,9 @@ std::vector<double> RawFailover(const BusBenchmarkHarness& harness, int repetiti
       // Both writers end with this block, before the reader they write to.
       const auto strong = harness.StartSelf({"--raw-owner", "10", "--domain", domain}, "owner_strong");
       const auto weak = harness.StartSelf({"--raw-owner", "1", "--domain", domain}, "owner_weak");
-      if (WaitUntil([&] { return listener.CountFrom(10) > 5000; }, 30s)) {
+      if (Eventually([&] { return listener.CountFrom(10) > 5000; }, 30s)) {
         strong->Signal(SIGKILL);
-        WaitUntil([&] { return listener.CountFrom(1) > 1000; }, 10s);
+        Eventually([&] { return listener.CountFrom(1) > 1000; }, 10s);
         std::lock_guard<std::mutex> lock(listener.mutex);
         int64_t last_strong_ns = 0, first_weak_ns = 0;
         for (const auto& [t, s] : listener.arrivals) {

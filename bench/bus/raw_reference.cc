@@ -14,7 +14,7 @@
 namespace dpc::bus_benchmark {
 namespace {
 
-using testing::WaitUntil;
+using testing::Eventually;
 using namespace std::chrono_literals;
 
 void WaitForStopSignal() {
@@ -82,9 +82,9 @@ int RunCommandEcho(int domain) {
                                         });
 }
 
-std::vector<std::unique_ptr<ChildProcess>> StartEchoes(const BusBenchmarkHarness& harness, int domain, bool chain,
+std::vector<std::unique_ptr<Process>> StartEchoes(const BusBenchmarkHarness& harness, int domain, bool chain,
                                                        const std::string& log_suffix) {
-  std::vector<std::unique_ptr<ChildProcess>> echoes;
+  std::vector<std::unique_ptr<Process>> echoes;
   for (const char* role : chain ? std::vector<const char*>{"relay", "command-echo"} : std::vector<const char*>{"pong"}) {
     echoes.push_back(
         harness.StartSelf({std::string("--") + role, "--domain", std::to_string(domain)}, role + log_suffix));
@@ -108,10 +108,10 @@ RawReference::RawReference(const BusBenchmarkHarness& harness, int domain, bool 
     }
   });
   // The chain is complete when a probe comes back.
-  WaitUntil([&] { return writer_->matched_readers() > 0 && reader_->counters().matched_writers.load() > 0; }, 20s);
+  Eventually([&] { return writer_->matched_readers() > 0 && reader_->counters().matched_writers.load() > 0; }, 20s);
   std::this_thread::sleep_for(200ms);
   if (chain) {
-    WaitUntil(
+    Eventually(
         [&] {
           Run(1, 0.0);
           std::lock_guard<std::mutex> lock(mutex_);

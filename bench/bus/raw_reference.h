@@ -26,7 +26,7 @@ int RunCommandEcho(int domain);
 
 /// The far side of a raw reference on `domain`: the ping-pong's echo, or the chain's relay and
 /// command echo (logs <role><log_suffix>.log).
-std::vector<std::unique_ptr<ChildProcess>> StartEchoes(const BusBenchmarkHarness& harness, int domain, bool chain,
+std::vector<std::unique_ptr<Process>> StartEchoes(const BusBenchmarkHarness& harness, int domain, bool chain,
                                                        const std::string& log_suffix);
 
 /// A raw reference, kept for several rounds so that its blocks alternate with the bench's:
@@ -47,7 +47,7 @@ class RawReference {
 
  private:
   bool chain_;
-  std::vector<std::unique_ptr<ChildProcess>> children_;
+  std::vector<std::unique_ptr<Process>> children_;
   bus::BusParticipant participant_;
   std::unique_ptr<bus::Writer<msg::StokesSample>> writer_;
   std::unique_ptr<bus::Reader<msg::WaveplateState>> reader_;

@@ -63,7 +63,7 @@ void TrackingTable(const BusBenchmarkHarness& harness, double seconds, const std
       std::vector<std::string> args = {"--rate-hz", "10000", "--run-s", fmt::format("{}", seconds),
                                        "--rate-rad-per-s", fmt::format("{}", rate_rad_per_s), "--json"};
       if (!scenario.empty()) args.insert(args.begin(), scenario);
-      ChildProcess& polarimeter = services.Polarimeter(args);
+      Process& polarimeter = services.Polarimeter(args);
       polarimeter.Wait(std::chrono::seconds(static_cast<int64_t>(seconds * 3 + 60)));
       const nlohmann::json r = LastJsonLine(polarimeter.Log());
       mean_deg[mode] =

@@ -3,7 +3,6 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
-#include <sys/wait.h>
 
 #include <array>
 #include <cmath>
@@ -13,56 +12,25 @@
 #include <sstream>
 #include <string>
 
+#include "support/command_line_fixture.h"
+
 namespace {
 
 namespace fs = std::filesystem;
+using namespace std::chrono_literals;
 
-struct Result {
-  int exit_code;
-  std::string out;
-  std::string err;
-};
+using dpc::testing::Result;
+using dpc::testing::Slurp;
 
-class DpcCliTest : public ::testing::Test {
+class DpcCliTest : public dpc::testing::CommandLineTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("dpc_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  // Runs `dpc <args>`; stdout and stderr captured through files.
-  Result Run(const std::string& args) {
-    const std::string out = (dir_ / "stdout").string(), err = (dir_ / "stderr").string();
-    const std::string command =
-        std::string(DPC_BINARY) + " " + args + " >" + out + " 2>" + err + " </dev/null";
-    const int status = std::system(command.c_str());
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, Slurp(out), Slurp(err)};
-  }
-  static std::string Slurp(const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  }
-  std::string Write(const std::string& name, const std::string& text) {
-    const fs::path p = dir_ / name;
-    std::ofstream(p) << text;
-    return p.string();
-  }
-  static std::string Scenario(const std::string& name) {
-    return std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/" + name + ".pbtxt";
-  }
+  Result Run(const std::string& args) { return Dpc(args); }
   // A valid minimal scenario with `extra` appended (later fields override nothing: text format
   // rejects repeated singular fields, so tests write whole messages).
   static std::string Minimal(const std::string& stages, const std::string& rest = "") {
     return stages + "\ninput { disturbances { paper_scrambler { rate_rad_per_s: 1e4 } } }\n" +
            "simulation { duration_s: 1e-4 }\ncontroller { activation_s: 0 }\n" + rest;
   }
-
-  fs::path dir_;
 };
 
 TEST_F(DpcCliTest, ShippedBenchScenariosRunAndLock) {
@@ -217,25 +185,28 @@ TEST_F(DpcCliTest, BadFlagsAreRejectedNamingTheFlag) {
 }
 
 TEST_F(DpcCliTest, InterruptStopsALongRunAndKeepsWhatWasRecorded) {
-  // 1e9 samples would take minutes; SIGINT after 1.5 s ends the run at the next progress check.
+  // 1e9 samples would take minutes; SIGINT once it has simulated for a second of CPU time ends
+  // the run at the next progress check.
   const std::string csv = (dir_ / "long.csv").string();
-  const std::string out = (dir_ / "out").string(), err = (dir_ / "err").string();
-  const std::string command = "timeout --preserve-status -s INT 1.5 " + std::string(DPC_BINARY) +
-                              " sim --duration-s 20 --json --trace " + csv +
-                              " --trace-every 100000 >" + out + " 2>" + err;
-  const int status = std::system(command.c_str());
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 130) << Slurp(err);
-  const auto j = nlohmann::json::parse(Slurp(out));
+  dpc::testing::Process dpc({DPC_BINARY, "sim", "--duration-s", "20", "--json", "--trace", csv, "--trace-every",
+                             "100000"},
+                            dir_ / "out", dir_ / "err");
+  const auto data_rows = [&] {
+    int rows = 0;
+    std::istringstream lines(Slurp(csv));
+    for (std::string line; std::getline(lines, line);) rows += !line.empty() && line[0] != '#' && line[0] != 't';
+    return rows;
+  };
+  ASSERT_TRUE(dpc::testing::Eventually([&] { return dpc.cpu_seconds() >= 1.0; }, 60s)) << dpc.err();
+  dpc.Signal(SIGINT);
+  EXPECT_EQ(dpc.Wait(60s), 130) << dpc.err();
+  const auto j = nlohmann::json::parse(dpc.out());
   EXPECT_TRUE(j["stopped_early"].get<bool>());
   const int64_t samples = j["samples"];
   EXPECT_GT(samples, 0);
   EXPECT_LT(samples, 1000000000);
   // The trace holds every 100 000th sample up to the stop: nothing recorded is lost.
-  int rows = 0;
-  std::istringstream lines(Slurp(csv));
-  for (std::string line; std::getline(lines, line);) rows += !line.empty() && line[0] != '#' && line[0] != 't';
-  EXPECT_EQ(rows, (samples + 99999) / 100000);
+  EXPECT_EQ(data_rows(), (samples + 99999) / 100000);
 }
 
 TEST_F(DpcCliTest, SweepPrintsATableAndJsonLines) {

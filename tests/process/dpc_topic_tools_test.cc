@@ -27,20 +27,13 @@
 #include <thread>
 #include <vector>
 
-extern char** environ;
+#include "support/command_line_fixture.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
-
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 std::vector<std::string> Lines(const std::string& text) {
   std::vector<std::string> out;
@@ -51,127 +44,17 @@ std::vector<std::string> Lines(const std::string& text) {
   return out;
 }
 
-/// Polls `condition` every 20 ms until it holds (true) or `timeout` passes (false).
-bool Eventually(const std::function<bool()>& condition, std::chrono::milliseconds timeout) {
-  const auto deadline = Clock::now() + timeout;
-  while (Clock::now() < deadline) {
-    if (condition()) return true;
-    std::this_thread::sleep_for(20ms);
-  }
-  return condition();
-}
+using dpc::testing::Eventually;
+using dpc::testing::Process;
+using dpc::testing::Result;
+using dpc::testing::Slurp;
 
-/// A child process with stdout and stderr in files; stopped and reaped on destruction.
-class Process {
- public:
-  Process(const std::vector<std::string>& argv, const fs::path& out, const fs::path& err)
-      : out_(out), err_(err), name_(argv.front()) {
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<char*> args;
-    for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-    args.push_back(nullptr);
-    // The loopback-only profile, whatever the caller's environment says.
-    std::vector<std::string> env_storage;
-    for (char** e = environ; *e != nullptr; ++e) {
-      if (std::string(*e).rfind("FASTRTPS_DEFAULT_PROFILES_FILE=", 0) != 0) env_storage.push_back(*e);
-    }
-    env_storage.push_back(std::string("FASTRTPS_DEFAULT_PROFILES_FILE=") + DPC_SOURCE_DIR +
-                          "/deploy/fastdds/loopback.xml");
-    std::vector<char*> env;
-    for (std::string& e : env_storage) env.push_back(e.data());
-    env.push_back(nullptr);
-    // Default SIGINT/SIGTERM and no blocked signal, whatever the test runner inherited (a shell
-    // starts background jobs with SIGINT ignored).
-    posix_spawnattr_t attributes;
-    posix_spawnattr_init(&attributes);
-    sigset_t defaults, none;
-    sigemptyset(&defaults);
-    sigaddset(&defaults, SIGINT);
-    sigaddset(&defaults, SIGTERM);
-    sigemptyset(&none);
-    posix_spawnattr_setsigdefault(&attributes, &defaults);
-    posix_spawnattr_setsigmask(&attributes, &none);
-    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK);
-    const int rc = posix_spawn(&pid_, args[0], &actions, &attributes, args.data(), env.data());
-    posix_spawnattr_destroy(&attributes);
-    posix_spawn_file_actions_destroy(&actions);
-    if (rc != 0) {
-      pid_ = -1;
-      ADD_FAILURE() << "posix_spawn " << argv.front() << ": " << std::strerror(rc);
-    }
-  }
-  ~Process() { Stop(); }
-  Process(const Process&) = delete;
-  Process& operator=(const Process&) = delete;
-
-  bool running() const { return pid_ > 0 && !status_; }
-  std::string out() const { return Slurp(out_); }
-  std::string err() const { return Slurp(err_); }
-
-  /// Waits up to `timeout` for the process to exit; its exit code (−signal if killed).
-  std::optional<int> Wait(std::chrono::milliseconds timeout) {
-    Eventually([this] { return Reap(); }, timeout);
-    return status_;
-  }
-
-  void Signal(int signal) {
-    if (running()) kill(pid_, signal);
-  }
-
-  /// SIGINT, up to 5 s to exit, then SIGKILL. Returns the exit code.
-  std::optional<int> Stop() {
-    if (pid_ <= 0) return std::nullopt;
-    if (!Reap()) {
-      kill(pid_, SIGINT);
-      if (!Wait(5000ms)) {
-        ADD_FAILURE() << name_ << " (pid " << pid_ << ") ignored SIGINT for 5 s: SIGKILL";
-        kill(pid_, SIGKILL);
-        int status = 0;
-        waitpid(pid_, &status, 0);
-        status_ = -SIGKILL;
-      }
-    }
-    return status_;
-  }
-
- private:
-  bool Reap() {
-    if (status_) return true;
-    if (pid_ <= 0) return false;
-    int status = 0;
-    if (waitpid(pid_, &status, WNOHANG) != pid_) return false;
-    status_ = WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
-    return true;
-  }
-
-  pid_t pid_ = -1;
-  std::optional<int> status_;
-  fs::path out_, err_;
-  std::string name_;
-};
-
-struct Result {
-  int exit_code;
-  std::string out;
-  std::string err;
-};
-
-class DpcTopicToolsTest : public ::testing::Test {
+class DpcTopicToolsTest : public dpc::testing::CommandLineTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("dpc_topic_tools_" + std::string(info->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
   void TearDown() override {
     // Stop the bench before its files go, in reverse order (polarimeter first).
     while (!bench_.empty()) bench_.pop_back();
-    fs::remove_all(dir_);
+    CommandLineTest::TearDown();
   }
 
   /// Starts a process (kept until the test ends); its output in files named after `tag`.
@@ -192,18 +75,6 @@ class DpcTopicToolsTest : public ::testing::Test {
     for (const auto& p : bench_) ASSERT_TRUE(p->running());
   }
 
-  /// Runs `dpc <args>` to completion (at most `timeout`).
-  Result Dpc(const std::vector<std::string>& args, std::chrono::milliseconds timeout = 30000ms) {
-    std::vector<std::string> argv = {DPC_BINARY};
-    argv.insert(argv.end(), args.begin(), args.end());
-    const std::string tag = "dpc" + std::to_string(++runs_);
-    Process p(argv, dir_ / (tag + ".out"), dir_ / (tag + ".err"));
-    const std::optional<int> code = p.Wait(timeout);
-    if (!code) ADD_FAILURE() << "dpc did not finish within " << timeout.count() << " ms";
-    const int exit_code = code ? *code : p.Stop().value_or(-1);
-    return {exit_code, p.out(), p.err()};
-  }
-
   /// Waits until the bench's controller is obeyed: one state sample naming it.
   void AwaitObeyed(int domain, const std::string& controller) {
     const bool obeyed = Eventually(
@@ -220,9 +91,7 @@ class DpcTopicToolsTest : public ::testing::Test {
                         << Slurp(dir_ / "driver.err") << Slurp(dir_ / "controller.err");
   }
 
-  fs::path dir_;
   std::vector<std::unique_ptr<Process>> bench_;
-  int runs_ = 0;
 };
 
 // ---- no bench needed

@@ -7,11 +7,8 @@
 
 namespace dpc::tools {
 
-ProgressBar::ProgressBar(std::string label, bool enabled)
-    : label_(std::move(label)),
-      enabled_(enabled),
-      start_(std::chrono::steady_clock::now()),
-      last_draw_(start_) {}
+ProgressBar::ProgressBar(std::string label, bool enabled, Now now)
+    : label_(std::move(label)), enabled_(enabled), now_(std::move(now)), start_(now_()), last_draw_(start_) {}
 
 ProgressBar::~ProgressBar() { Finish(); }
 
@@ -19,7 +16,7 @@ bool ProgressBar::StderrIsTerminal() { return isatty(STDERR_FILENO) == 1; }
 
 void ProgressBar::Update(int64_t done, int64_t total) {
   if (!enabled_ || total <= 0) return;
-  const auto now = std::chrono::steady_clock::now();
+  const Clock::time_point now = now_();
   if (drawn_ && now - last_draw_ < std::chrono::milliseconds(100) && done < total) return;
   last_draw_ = now;
   const double fraction = static_cast<double>(done) / static_cast<double>(total);

@@ -6,13 +6,18 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <string>
 
 namespace dpc::tools {
 
 class ProgressBar {
  public:
-  ProgressBar(std::string label, bool enabled);
+  using Clock = std::chrono::steady_clock;
+  /// The time source (tests pass their own); default: the steady clock.
+  using Now = std::function<Clock::time_point()>;
+
+  ProgressBar(std::string label, bool enabled, Now now = Clock::now);
   ~ProgressBar();
 
   /// Redraws if at least 100 ms passed since the last draw.
@@ -25,9 +30,10 @@ class ProgressBar {
  private:
   std::string label_;
   bool enabled_;
+  Now now_;
   bool drawn_ = false;
-  std::chrono::steady_clock::time_point start_;
-  std::chrono::steady_clock::time_point last_draw_;
+  Clock::time_point start_;
+  Clock::time_point last_draw_;
 };
 
 }  // namespace dpc::tools

@@ -1,0 +1,160 @@
+// Which controller the running bench obeys: a higher priority takes over without a jump, kill -9
+// of the obeyed controller hands control to the standby, and with no controller the driver
+// holds, says why, and resumes. Real processes on loopback, each test on its own DDS domain.
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <csignal>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "support/bench_fixture.h"
+#include "support/json_lines.h"
+
+namespace dpc {
+namespace {
+
+using dpc::testing::Eventually;
+using dpc::testing::LastJsonLine;
+using dpc::testing::Process;
+using dpc::testing::SeenState;
+using namespace std::chrono_literals;
+
+class BenchFailoverTest : public dpc::testing::BenchFixture {};
+
+double MaxAbsDifference(const std::vector<double>& a, const std::vector<double>& b) {
+  double m = 0.0;
+  for (size_t i = 0; i < a.size() && i < b.size(); ++i) m = std::max(m, std::abs(a[i] - b[i]));
+  return m;
+}
+
+TEST_F(BenchFailoverTest, HigherPriorityControllerTakesOverWithoutAJump) {
+  StartObserver(42);
+  StartDriver();
+  StartController("low", 0);
+  StartPolarimeter({"--rate-hz", "2000"});
+  ASSERT_TRUE(Eventually([&] { return AppliedBy("low") > 2000; }, 20s)) << Logs();  // ~1 s locked
+  const size_t before = StateCount();
+  StartController("high", 10);
+  ASSERT_TRUE(Eventually([&] { return AppliedBy("high") > 200; }, 20s)) << Logs();
+  const auto states = States();
+  // The largest step of any stage between consecutive applied states: while tracking, and at
+  // the switch. Bumpless: the switch is no larger than a tracking step (plus a margin).
+  double tracking_step = 0.0, switch_step = 0.0;
+  for (size_t i = std::max<size_t>(before, 1); i < states.size(); ++i) {
+    const auto& a = states[i - 1].state;
+    const auto& b = states[i].state;
+    const double step = MaxAbsDifference(a.phi_applied(), b.phi_applied());
+    if (a.obeyed_controller_id() != b.obeyed_controller_id()) {
+      switch_step = std::max(switch_step, step);
+    } else {
+      tracking_step = std::max(tracking_step, step);
+    }
+  }
+  EXPECT_TRUE(SoonObeys("high")) << LatestState()->reason().to_string();
+  EXPECT_LT(switch_step, std::max(0.02, 2.0 * tracking_step))
+      << "tracking step " << tracking_step << ", switch step " << switch_step;
+  const auto status = Status("low");
+  ASSERT_TRUE(status.has_value());
+  EXPECT_FALSE(status->obeyed());
+}
+
+TEST_F(BenchFailoverTest, KillNineOfTheObeyedControllerHandsControlToTheStandby) {
+  StartObserver(43);
+  StartDriver();
+  Process& primary = StartController("primary", 10);
+  StartController("standby", 0);
+  StartPolarimeter({"--rate-hz", "5000"});
+  ASSERT_TRUE(Eventually([&] { return AppliedBy("primary") > 2000; }, 20s)) << Logs();
+  primary.Signal(SIGKILL);
+  const size_t standby_before = AppliedBy("standby");  // a loaded machine may have switched briefly
+  ASSERT_TRUE(Eventually([&] { return AppliedBy("standby") > standby_before + 500; }, 10s)) << Logs();
+  // The failover gap: from the last command of the killed controller the driver applied to the
+  // first of the standby's (driver receive times, wall clock).
+  const auto states = States();
+  // (A loaded machine may have switched briefly before: look after the primary's last state.)
+  int64_t last_primary_ns = 0, first_standby_ns = 0;
+  size_t last_primary = 0;
+  for (size_t i = 0; i < states.size(); ++i) {
+    const auto& s = states[i].state;
+    if (s.answers_sample() > 0 && s.obeyed_controller_id().to_string() == "primary") {
+      last_primary_ns = s.command_receive_time_ns();
+      last_primary = i;
+    }
+  }
+  double switch_step = 0.0;
+  for (size_t i = last_primary + 1; i < states.size(); ++i) {
+    const auto& s = states[i].state;
+    // (The driver's own switch notice repeats the primary's last command: skip it.)
+    if (s.answers_sample() > 0 && s.obeyed_controller_id().to_string() == "standby" &&
+        s.command_receive_time_ns() > last_primary_ns) {
+      first_standby_ns = s.command_receive_time_ns();
+      switch_step = MaxAbsDifference(states[last_primary].state.phi_applied(), s.phi_applied());
+      break;
+    }
+  }
+  ASSERT_GT(first_standby_ns, last_primary_ns);
+  const double gap_ms = static_cast<double>(first_standby_ns - last_primary_ns) * 1e-6;
+  std::printf("failover gap after kill -9: %.2f ms, step at the switch %.4f\n", gap_ms, switch_step);
+  EXPECT_LE(gap_ms, 10.0);
+  // Bumpless, seen where it matters, at the output: no error spike after the switch. (The step
+  // in φ is not a good measure: the input keeps turning during the gap, and a starved primary
+  // may have lagged, so the standby's first command legitimately corrects that.) A standby that
+  // continued from a φ of its own jumped by 0.24 to 0.96 in φ, tens of degrees at the output.
+  const double before_deg = MaxErrorDeg(last_primary_ns - 200'000'000, last_primary_ns);
+  const double after_deg = MaxErrorDeg(first_standby_ns, first_standby_ns + 100'000'000);
+  std::printf("largest output error: %.2f° in the 200 ms before the kill, %.2f° in the 100 ms after the switch\n",
+              before_deg, after_deg);
+  // While nobody commands (the gap, and any stall of the machine right after the kill), the
+  // driver holds φ and the input keeps turning at the scrambler's rate (20 rad/s in the embedded
+  // bench_default.pbtxt): that drift is the hold's, not a bump of the standby. Seen in CI: a
+  // 2.2-ms gap followed by a 6.9° peak (1.9° before), with a φ step of 0.003 at the switch.
+  constexpr double kScramblerRateRadPerS = 20.0;
+  const double hold_drift_deg = kScramblerRateRadPerS * gap_ms * 1e-3 * 180.0 / M_PI;
+  EXPECT_LT(after_deg, std::max(5.0, 2.0 * before_deg) + hold_drift_deg) << "hold drift " << hold_drift_deg << "°";
+  EXPECT_TRUE(SoonObeys("standby")) << LatestState()->reason().to_string();
+}
+
+TEST_F(BenchFailoverTest, WithoutAControllerTheDriverHoldsAndReportsThenResumes) {
+  // A still input: the held φ stays right, so a resuming controller has nothing to correct and
+  // any step it makes is a bump.
+  StartObserver(44);
+  StartDriver();
+  Process& only = StartController("only", 0);
+  StartPolarimeter({"--rate-hz", "2000", "--static"});
+  ASSERT_TRUE(Eventually([&] { return AppliedBy("only") > 1000; }, 20s)) << Logs();
+  only.Signal(SIGKILL);
+  ASSERT_TRUE(Eventually([&] {
+    auto s = LatestState();
+    return s && s->mode() == msg::DRIVER_HOLDING;
+  }, 5s)) << Logs();
+  const msg::WaveplateState holding = *LatestState();
+  EXPECT_NE(holding.reason().to_string().find("only silent"), std::string::npos) << holding.reason().to_string();
+  // While holding, heartbeats repeat the same φ.
+  const size_t count = StateCount();
+  ASSERT_TRUE(Eventually([&] { return StateCount() > count + 3; }, 5s));
+  const auto held = LatestState();
+  EXPECT_EQ(held->mode(), msg::DRIVER_HOLDING);
+  EXPECT_EQ(held->phi_applied(), holding.phi_applied());
+  // A new controller resumes from the held φ.
+  const size_t before = StateCount();
+  StartController("next", 0);
+  ASSERT_TRUE(Eventually([&] { return AppliedBy("next") > 100; }, 20s)) << Logs();
+  const auto states = States();
+  for (size_t i = before; i < states.size(); ++i) {
+    if (states[i].state.obeyed_controller_id().to_string() == "next" && states[i].state.answers_sample() > 0) {
+      EXPECT_LT(MaxAbsDifference(states[i].state.phi_applied(), holding.phi_applied()), 0.05)
+          << "the first command of the new controller jumped: state " << i - before << " after "
+          << "the hold; " << Logs();
+      break;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace dpc

@@ -1,0 +1,90 @@
+// What a running bench does with malformed input on the bus: counted, reported, never applied.
+// Real processes on loopback, the test writing the bad messages through its own participant.
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <csignal>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "support/bench_fixture.h"
+#include "support/json_lines.h"
+
+namespace dpc {
+namespace {
+
+using dpc::testing::Eventually;
+using dpc::testing::LastJsonLine;
+using dpc::testing::Process;
+using dpc::testing::SeenState;
+using namespace std::chrono_literals;
+
+class BenchInputTest : public dpc::testing::BenchFixture {};
+
+TEST_F(BenchInputTest, MalformedCommandsAndSamplesAreCountedAndNeverApplied) {
+  StartObserver(45);
+  StartDriver();
+  StartController("A", 0);
+  StartPolarimeter({"--rate-hz", "1000"});
+  ASSERT_TRUE(Eventually([&] { return AppliedBy("A") > 200; }, 20s)) << Logs();
+  auto commands = participant_->MakeWriter<msg::WaveplateCommand>();
+  auto samples = participant_->MakeWriter<msg::StokesSample>();
+  ASSERT_TRUE(Eventually([&] { return commands->matched_readers() > 0 && samples->matched_readers() > 0; }, 10s));
+  auto bad_command = [](std::vector<double> phi) {
+    msg::WaveplateCommand c;
+    c.bench_id("bench1");
+    c.controller_id("intruder");
+    c.priority(100);  // would win if it were valid
+    c.answers_sample(1);
+    c.phi(std::move(phi));
+    return c;
+  };
+  // One at a time, re-sent every 50 ms until counted: the periodic topics are best effort and
+  // keep only the latest sample, so a write may be lost or replaced.
+  auto write_until = [](const std::function<void()>& write, const std::function<bool()>& counted) {
+    for (int attempt = 0; attempt < 100; ++attempt) {
+      write();
+      if (Eventually(counted, 50ms)) return true;
+    }
+    return false;
+  };
+  for (const auto& phi : {std::vector<double>{NAN, 0.0, 0.0}, std::vector<double>{0.1, 0.2},
+                          std::vector<double>(17, 0.0), std::vector<double>{INFINITY, 0.0, 0.0}}) {
+    const uint64_t rejected_before = LatestState()->commands_rejected();
+    ASSERT_TRUE(write_until([&] { commands->Write(bad_command(phi)); },
+                            [&] { return LatestState()->commands_rejected() > rejected_before; }))
+        << phi.size() << " values: " << Logs();
+  }
+  EXPECT_TRUE(SoonObeys("A")) << LatestState()->reason().to_string();
+  const auto state = LatestState();
+  for (double v : state->phi_applied()) EXPECT_TRUE(std::isfinite(v));
+  EXPECT_FALSE(state->last_rejection().to_string().empty());
+
+  msg::StokesSample sample;
+  sample.bench_id("bench1");
+  sample.sequence_number(1);
+  sample.s_in({1.0, 1.0, 0.0});   // not unit
+  sample.s_out({1.0, 0.0, 0.0});
+  ASSERT_TRUE(write_until([&] { samples->Write(sample); }, [&] {
+    auto status = Status("A");
+    return status && status->rejected_samples() >= 1;
+  })) << Logs();
+  sample.s_in({NAN, 0.0, 0.0});
+  const uint64_t rejected_samples = Status("A")->rejected_samples();
+  ASSERT_TRUE(write_until([&] { samples->Write(sample); }, [&] {
+    auto status = Status("A");
+    return status && status->rejected_samples() > rejected_samples;
+  })) << Logs();
+  EXPECT_NE(Status("A")->last_rejection().to_string().find("s_in"), std::string::npos);
+  // The loop kept running on the good samples.
+  const size_t applied = AppliedBy("A");
+  EXPECT_TRUE(Eventually([&] { return AppliedBy("A") > applied + 100; }, 5s));
+}
+
+}  // namespace
+}  // namespace dpc

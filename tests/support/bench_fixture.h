@@ -1,0 +1,152 @@
+#pragma once
+// The fixture of the tests that run the bench as real processes on loopback: it starts
+// dpc-driver, dpc-controller(s) and dpc-polarimeter on the test's own DDS domain (each logging
+// to a file), watches the bus through its own participant (states, samples, controller status),
+// and ends every process it started (SIGINT, then SIGKILL) when the test ends.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "dpc/bench/clock.h"
+#include "dpc/bus/bus_participant.h"
+#include "support/process.h"
+
+namespace dpc::testing {
+
+inline std::string BenchTempDir() {
+  const std::string dir = ::testing::TempDir() + "dpc_bench_process_" + std::to_string(getpid());
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+/// One applied state as seen by the test.
+struct SeenState {
+  msg::WaveplateState state;
+  int64_t seen_ns;
+};
+
+class BenchFixture : public ::testing::Test {
+ protected:
+  void StartObserver(int domain) {
+    domain_ = domain;
+    participant_ = std::make_unique<bus::BusParticipant>(bus::BusOptions{domain, "dpc-test-observer"});
+    states_ = participant_->MakeReader<msg::WaveplateState>(
+        "bench1", [this](const msg::WaveplateState& state, const auto&) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          seen_.push_back({state, MonotonicNs()});
+        });
+    samples_ = participant_->MakeReader<msg::StokesSample>(
+        "bench1", [this](const msg::StokesSample& sample, const auto&) {
+          // Error of the measured output to the default target [0, 0.6, 0.8], degrees.
+          const auto& s = sample.s_out();
+          const double cosine = std::clamp(0.6 * s[1] + 0.8 * s[2], -1.0, 1.0);
+          std::lock_guard<std::mutex> lock(mutex_);
+          sample_errors_.push_back({sample.publish_time_ns(), std::acos(cosine) * 180.0 / M_PI});
+        });
+    statuses_ = participant_->MakeReader<msg::ControllerStatus>(
+        "bench1", [this](const msg::ControllerStatus& status, const auto&) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          statuses_seen_[status.controller_id().to_string()] = status;
+        });
+  }
+  void TearDown() override {
+    processes_.clear();  // ends them (SIGINT, then SIGKILL)
+    statuses_.reset();
+    samples_.reset();
+    states_.reset();
+    participant_.reset();
+  }
+
+  Process& Start(const std::string& binary, std::vector<std::string> args, const std::string& name) {
+    args.insert(args.begin(), binary);
+    args.push_back("--domain");
+    args.push_back(std::to_string(domain_));
+    processes_.push_back(std::make_unique<Process>(args, dir_ + "/" + name + ".log"));
+    return *processes_.back();
+  }
+  Process& StartDriver(std::vector<std::string> args = {}) {
+    return Start(DPC_DRIVER_BINARY, std::move(args), "driver");
+  }
+  Process& StartController(const std::string& id, int priority, std::vector<std::string> args = {}) {
+    args.insert(args.end(), {"--id", id, "--priority", std::to_string(priority)});
+    return Start(DPC_CONTROLLER_BINARY, std::move(args), "controller_" + id);
+  }
+  Process& StartPolarimeter(std::vector<std::string> args, const std::string& name = "polarimeter") {
+    return Start(DPC_POLARIMETER_BINARY, std::move(args), name);
+  }
+
+  std::vector<SeenState> States() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return seen_;
+  }
+  size_t StateCount() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return seen_.size();
+  }
+  std::optional<msg::WaveplateState> LatestState() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (seen_.empty()) return std::nullopt;
+    return seen_.back().state;
+  }
+  std::optional<msg::ControllerStatus> Status(const std::string& id) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = statuses_seen_.find(id);
+    if (it == statuses_seen_.end()) return std::nullopt;
+    return it->second;
+  }
+  bool Obeys(const std::string& id) {
+    auto state = LatestState();
+    return state && state->mode() == msg::DRIVER_ACTIVE && state->obeyed_controller_id().to_string() == id;
+  }
+  /// Obeys(id) within `timeout`: the latest state may be a holding heartbeat of a stall of the
+  /// whole machine, after which the driver gives control back to the same controller.
+  bool SoonObeys(const std::string& id, std::chrono::milliseconds timeout = std::chrono::seconds(2)) {
+    return Eventually([&] { return Obeys(id); }, timeout);
+  }
+  /// The largest output error of the samples published in [from_ns, to_ns] (wall clock).
+  double MaxErrorDeg(int64_t from_ns, int64_t to_ns) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    double worst = 0.0;
+    for (const auto& [t, e] : sample_errors_) {
+      if (t >= from_ns && t <= to_ns) worst = std::max(worst, e);
+    }
+    return worst;
+  }
+  /// Applied states obeying `id` seen so far.
+  size_t AppliedBy(const std::string& id) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    size_t n = 0;
+    for (const auto& s : seen_) n += s.state.obeyed_controller_id().to_string() == id && s.state.answers_sample() > 0;
+    return n;
+  }
+
+  std::string Logs() {
+    std::string all;
+    for (auto& p : processes_) all += "---- " + p->out_path().string() + "\n" + p->Log();
+    return all;
+  }
+
+  std::string dir_ = BenchTempDir();
+  int domain_ = 0;
+  std::unique_ptr<bus::BusParticipant> participant_;
+  std::unique_ptr<bus::Reader<msg::WaveplateState>> states_;
+  std::unique_ptr<bus::Reader<msg::ControllerStatus>> statuses_;
+  std::unique_ptr<bus::Reader<msg::StokesSample>> samples_;
+  std::vector<std::pair<int64_t, double>> sample_errors_;  ///< (publish time ns, error deg)
+  std::mutex mutex_;
+  std::vector<SeenState> seen_;
+  std::map<std::string, msg::ControllerStatus> statuses_seen_;
+  std::vector<std::unique_ptr<Process>> processes_;
+};
+
+}  // namespace dpc::testing
