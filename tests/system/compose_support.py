@@ -1,0 +1,281 @@
+"""What the compose system test (compose_system_test.py) is made of: the Docker engine and the
+compose command, compose projects, `dpc topic echo` from the host, the bench seen from the host
+(errors to the target, lock, latest state), and small helpers. Constants name the test's
+networks (in 10.99.0.0/16), image, domain and bench id."""
+
+import json
+import math
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+SKIP = 77
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+PREFIX = "10.99.77"          # the test's network (the compose default is 10.99.10)
+SPLIT_PREFIX = "10.99.78"
+IMAGE = "dpc-bench:systest"
+DOMAIN = "0"
+BENCH_ID = "systest"
+
+
+def log(message):
+    print(f"[compose-test {time.strftime('%H:%M:%S')}] {message}", flush=True)
+
+
+def run(args, check=True, env=None, timeout=None, capture=True):
+    result = subprocess.run(args, env=env, timeout=timeout, text=True,
+                            stdout=subprocess.PIPE if capture else None,
+                            stderr=subprocess.STDOUT if capture else None)
+    if check and result.returncode != 0:
+        raise RuntimeError(f"{' '.join(args)} exited {result.returncode}:\n{result.stdout or ''}")
+    return result
+
+
+class Failure(Exception):
+    pass
+
+
+def expect(condition, message):
+    if not condition:
+        raise Failure(message)
+    log(f"ok: {message}")
+
+
+# --- the Docker engine ------------------------------------------------------------------------
+
+class Engine:
+    """Makes a Docker engine available; stops the one it started (only that one)."""
+
+    def __init__(self):
+        self.started = None
+
+    def answers(self):
+        return shutil.which("docker") and run(["docker", "info"], check=False, timeout=30).returncode == 0
+
+    def ensure(self):
+        if self.answers():
+            return None
+        if os.geteuid() != 0:
+            return "no Docker engine answers and this user is not root (cannot install or start one)"
+        missing = [p for p in ("docker.io", "docker-compose", "debootstrap")
+                   if run(["dpkg-query", "-W", "-f=${Status}", p], check=False).stdout.find("install ok installed") < 0]
+        if missing:
+            log(f"installing {' '.join(missing)}")
+            env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+            run(["apt-get", "update", "-qq"], env=env, timeout=600)
+            run(["apt-get", "install", "-y", "-qq", "--no-install-recommends", *missing], env=env, timeout=1200)
+        if not self.answers():
+            dockerd = shutil.which("dockerd") or "/usr/sbin/dockerd"
+            log("starting dockerd")
+            self.log_file = open(os.path.join(tempfile.gettempdir(), "dpc-systest-dockerd.log"), "w")
+            self.started = subprocess.Popen([dockerd], stdout=self.log_file, stderr=subprocess.STDOUT)
+            deadline = time.monotonic() + 60
+            while not self.answers():
+                if self.started.poll() is not None or time.monotonic() > deadline:
+                    return "dockerd did not start (see " + self.log_file.name + ")"
+                time.sleep(0.5)
+        return None
+
+    def stop(self):
+        if self.started and self.started.poll() is None:
+            log(f"stopping the dockerd this test started (PID {self.started.pid})")
+            self.started.send_signal(signal.SIGTERM)
+            try:
+                self.started.wait(60)
+            except subprocess.TimeoutExpired:
+                self.started.kill()
+
+
+def compose_command():
+    """`docker compose` (v2) where the plugin exists, else `docker-compose` (1.29)."""
+    if run(["docker", "compose", "version"], check=False).returncode == 0:
+        return ["docker", "compose"]
+    if shutil.which("docker-compose"):
+        return ["docker-compose"]
+    return None
+
+
+class Project:
+    """One compose project: its own name, files and environment."""
+
+    def __init__(self, base, name, files, env):
+        self.base, self.name, self.files = base, name, files
+        self.env = dict(os.environ, **env)
+
+    def __call__(self, *args, check=True, timeout=600, capture=True):
+        command = [*self.base, "-p", self.name]
+        for f in self.files:
+            command += ["-f", os.path.join(REPO, f)]
+        return run([*command, *args], check=check, env=self.env, timeout=timeout, capture=capture)
+
+    def container(self, service):
+        out = self("ps", "-q", service).stdout.strip().splitlines()
+        if not out:
+            raise Failure(f"no container for {service} in {self.name}")
+        return out[-1]
+
+    def leftovers(self):
+        label = f"label=com.docker.compose.project={self.name}"
+        found = {}
+        for kind, command in (("containers", ["docker", "ps", "-a", "-q"]),
+                              ("networks", ["docker", "network", "ls", "-q"]),
+                              ("volumes", ["docker", "volume", "ls", "-q"])):
+            ids = run([*command, "--filter", label]).stdout.split()
+            if ids:
+                found[kind] = ids
+        return found
+
+    def down(self):
+        self("down", "-v", "--remove-orphans", "-t", "10", check=False, timeout=300)
+
+
+# --- watching from the host -------------------------------------------------------------------
+
+class Echo:
+    """`dpc topic echo TOPIC --json` on the host; every line kept with its arrival time."""
+
+    def __init__(self, dpc, topic, profile):
+        env = dict(os.environ, FASTRTPS_DEFAULT_PROFILES_FILE=profile)
+        self.topic = topic
+        self.process = subprocess.Popen(
+            [dpc, "topic", "echo", topic, "--json", "--domain", DOMAIN, "--bench-id", BENCH_ID],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        self.lock = threading.Lock()
+        self.items = []
+        self.stderr = []
+        threading.Thread(target=self._read, daemon=True).start()
+        threading.Thread(target=lambda: self.stderr.extend(self.process.stderr), daemon=True).start()
+
+    def _read(self):
+        for line in self.process.stdout:
+            try:
+                item = json.loads(line)
+            except ValueError:
+                continue
+            with self.lock:
+                self.items.append((time.monotonic(), item))
+
+    def snapshot(self, since=0.0):
+        with self.lock:
+            return [(t, m) for t, m in self.items if t >= since]
+
+    def count(self):
+        with self.lock:
+            return len(self.items)
+
+    def stop(self):
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGTERM)
+            try:
+                self.process.wait(10)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+
+
+def host_profile(prefix, server, directory):
+    path = os.path.join(directory, f"host-{prefix}.xml")
+    args = [os.path.join(REPO, "deploy", "host-profile.sh"), "--prefix", prefix] + (["--server"] if server else [])
+    with open(path, "w") as f:
+        f.write(run(args).stdout)
+    return path
+
+
+def angle_deg(a, b):
+    dot = sum(x * y for x, y in zip(a, b))
+    cross = math.sqrt(sum(v * v for v in (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                                           a[0] * b[1] - a[1] * b[0])))
+    return math.degrees(math.atan2(cross, dot))
+
+
+class Bench:
+    """What the host sees of one bench: samples, driver states, the target."""
+
+    def __init__(self, dpc, profile):
+        self.samples = Echo(dpc, "dpc_stokes_sample", profile)
+        self.states = Echo(dpc, "dpc_waveplate_state", profile)
+        self.targets = Echo(dpc, "dpc_target", profile)
+
+    def stop(self):
+        for echo in (self.samples, self.states, self.targets):
+            echo.stop()
+
+    def target(self):
+        items = self.targets.snapshot()
+        if not items:
+            return None
+        point = items[-1][1].get("point")
+        return point if items[-1][1].get("kind") == "TARGET_POINT" else None
+
+    def errors(self, since, until=None):
+        """(arrival time, angle from S_out to the target in degrees) of the samples seen."""
+        target = self.target()
+        if target is None:
+            return []
+        until = until or math.inf
+        return [(t, angle_deg(m["s_out"], target)) for t, m in self.samples.snapshot(since) if t <= until]
+
+    def wait(self, condition, timeout_s, what):
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            if condition():
+                return True
+            time.sleep(0.05)
+        raise Failure(f"timed out after {timeout_s:.0f} s waiting for {what}; "
+                      f"seen {self.samples.count()} samples, {self.states.count()} states; "
+                      f"echo stderr: {''.join(self.states.stderr[-5:])}")
+
+    def locked_since(self, since, window_s=0.2, threshold_deg=2.0, rate_floor_hz=200):
+        """The end of the first window of window_s after `since` where every sample was within
+        threshold_deg of the target, with at least rate_floor_hz samples a second; None if none."""
+        errors = self.errors(since)
+        start = 0
+        for end in range(len(errors)):
+            if errors[end][1] > threshold_deg:
+                start = end + 1
+                continue
+            span = errors[end][0] - errors[start][0]
+            if span >= window_s and (end - start + 1) >= rate_floor_hz * window_s:
+                return errors[end][0]
+        return None
+
+    def latest_state(self):
+        items = self.states.snapshot()
+        return items[-1][1] if items else None
+
+
+def cyclone_reads(probe, prefix, work):
+    """Another vendor's subscriber on the host (Cyclone DDS, deploy/cyclonedds/compose-host.xml)."""
+    with open(os.path.join(REPO, "deploy", "cyclonedds", "compose-host.xml")) as f:
+        config = f.read().replace("10.99.10.", prefix + ".")
+    path = os.path.join(work, "cyclone-host.xml")
+    with open(path, "w") as f:
+        f.write(config)
+    result = run([probe, "--domain", DOMAIN, "--bench-id", BENCH_ID, "--timeout-s", "15", "--states", "3"],
+                 check=False, env=dict(os.environ, CYCLONEDDS_URI=f"file://{path}"), timeout=60)
+    topics = set()
+    for line in result.stdout.splitlines():
+        try:
+            topics.add(json.loads(line).get("topic"))
+        except ValueError:
+            pass
+    expect(result.returncode == 0 and "dpc_waveplate_state" in topics,
+           f"a Cyclone DDS subscriber on the host reads the bench (topics {sorted(t for t in topics if t)})")
+
+
+def loop_latencies_us(bench, since):
+    """Sorted latencies from a sample's publication (polarimeter) to the driver's receipt of the
+    command that answers it, for the states seen since `since` (one host clock for all containers)."""
+    published = {m["sequence_number"]: m["publish_time_ns"] for _, m in bench.samples.snapshot(since - 1.0)}
+    return sorted((m["command_receive_time_ns"] - published[m["answers_sample"]]) * 1e-3
+                  for _, m in bench.states.snapshot(since)
+                  if m["mode"] == "DRIVER_ACTIVE" and m["answers_sample"] in published)
+
+
+def max_abs_difference(a, b):
+    return max(abs(x - y) for x, y in zip(a, b))
