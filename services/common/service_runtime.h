@@ -38,8 +38,8 @@ ScenarioConfig LoadServiceScenario(const CommonOptions& options);
 /// "invalid scenario: controller.step: … (set by --step)".
 std::string DescribeError(const ScenarioError& error, const CommonOptions& options);
 
-/// Sets up spdlog ("[driver bench1] …" on stderr) at `level`; throws CLI::ValidationError for an
-/// unknown level.
+/// Sets up spdlog ("[driver bench1] …" on stderr) at options.log_level (one of the names
+/// --log-level accepts; the option checks it). Calling it again replaces the logger.
 void SetUpLogging(const std::string& service, const CommonOptions& options);
 
 /// Logs rejected input without letting a flood of it stall the loop: the first rejection, then

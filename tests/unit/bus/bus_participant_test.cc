@@ -1,0 +1,189 @@
+// BusParticipant: profiles resolution, participants and typed readers and writers on the
+// loopback-only profile. Every participant here uses deploy/fastdds/loopback.xml and a DDS
+// domain of 64–66 (this file's share of the tests' range 60–79), so nothing leaves the host and
+// no other test's traffic meets these.
+#include "dpc/bus/bus_participant.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "support/process.h"
+
+namespace dpc::bus {
+namespace {
+
+using namespace std::chrono_literals;
+using dpc::testing::Eventually;
+using dpc::testing::Slurp;
+
+const std::string kLoopbackProfiles = std::string(DPC_SOURCE_DIR) + "/deploy/fastdds/loopback.xml";
+constexpr int kExchangeDomain = 64;
+constexpr int kOtherBenchDomain = 65;
+constexpr int kParticipantDomain = 66;
+constexpr auto kDiscoveryTimeout = 10s;
+
+msg::StokesSample Sample(const std::string& bench_id, uint64_t sequence) {
+  msg::StokesSample m;
+  m.bench_id(bench_id);
+  m.sequence_number(sequence);
+  m.sample_time_ns(static_cast<int64_t>(sequence) * 100'000);
+  m.s_in({1.0, 0.0, 0.0});
+  m.s_out({0.0, 0.6, 0.8});
+  return m;
+}
+
+/// What a reader's callback saw, from Fast DDS's listener thread.
+class Received {
+ public:
+  void Add(const msg::StokesSample& m) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    samples_.push_back(m);
+  }
+  std::vector<msg::StokesSample> samples() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return samples_;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::vector<msg::StokesSample> samples_;
+};
+
+// Points FASTRTPS_DEFAULT_PROFILES_FILE at the loopback profile for each test and restores the
+// caller's environment afterwards.
+class BusParticipantTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (const char* value = std::getenv(kProfilesEnvironmentVariable)) saved_ = value;
+    setenv(kProfilesEnvironmentVariable, kLoopbackProfiles.c_str(), 1);
+  }
+  void TearDown() override {
+    if (saved_) {
+      setenv(kProfilesEnvironmentVariable, saved_->c_str(), 1);
+    } else {
+      unsetenv(kProfilesEnvironmentVariable);
+    }
+  }
+
+  static BusOptions Options(int domain_id, const std::string& name) {
+    BusOptions options;
+    options.domain_id = domain_id;
+    options.participant_name = name;
+    return options;
+  }
+
+  std::optional<std::string> saved_;
+};
+
+TEST_F(BusParticipantTest, ResolveProfilesFileReturnsTheFileTheVariableNames) {
+  EXPECT_EQ(ResolveProfilesFile(), kLoopbackProfiles);
+}
+
+TEST_F(BusParticipantTest, ResolveProfilesFileRefusesAMissingFileAndNamesIt) {
+  const std::string missing = (std::filesystem::temp_directory_path() /
+                               ("dpc_bus_test_missing_" + std::to_string(::getpid()) + ".xml"))
+                                  .string();
+  setenv(kProfilesEnvironmentVariable, missing.c_str(), 1);
+  try {
+    ResolveProfilesFile();
+    FAIL() << "a missing profiles file resolved";
+  } catch (const BusError& e) {
+    EXPECT_NE(std::string(e.what()).find(missing), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(kProfilesEnvironmentVariable), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(BusParticipantTest, ResolveProfilesFileWithoutTheVariableFindsTheShippedLoopbackProfile) {
+  for (const char* value : {static_cast<const char*>(nullptr), ""}) {  // unset, or set empty
+    if (value == nullptr) {
+      unsetenv(kProfilesEnvironmentVariable);
+    } else {
+      setenv(kProfilesEnvironmentVariable, value, 1);
+    }
+    const std::string file = ResolveProfilesFile();
+    // The copy next to the binaries or the source tree's: the same shipped file either way.
+    EXPECT_EQ(std::filesystem::path(file).filename(), "loopback.xml") << file;
+    EXPECT_EQ(Slurp(file), Slurp(kLoopbackProfiles)) << file;
+  }
+}
+
+TEST_F(BusParticipantTest, AParticipantOnTheLoopbackProfileUsesNoBuiltinTransport) {
+  BusParticipant participant(Options(kParticipantDomain, "dpc_bus_test"));
+  EXPECT_EQ(participant.profiles_file(), kLoopbackProfiles);
+  ASSERT_NE(participant.raw(), nullptr);
+  EXPECT_EQ(participant.raw()->get_domain_id(), kParticipantDomain);
+  const auto qos = participant.raw()->get_qos();
+  EXPECT_EQ(std::string(qos.name().c_str()), "dpc_bus_test");
+  // Only the profile's UDPv4 transport on 127.0.0.1: nothing binds another interface.
+  EXPECT_FALSE(qos.transport().use_builtin_transports);
+  EXPECT_EQ(qos.transport().user_transports.size(), 1u);
+}
+
+TEST_F(BusParticipantTest, AWriterAndAReaderInTwoParticipantsExchangeASample) {
+  BusParticipant publishing(Options(kExchangeDomain, "dpc_bus_test_writer"));
+  BusParticipant subscribing(Options(kExchangeDomain, "dpc_bus_test_reader"));
+  Received received;
+  auto reader = subscribing.MakeReader<msg::StokesSample>(
+      "bench1", [&](const msg::StokesSample& m, const eprosima::fastdds::dds::SampleInfo&) { received.Add(m); });
+  auto writer = publishing.MakeWriter<msg::StokesSample>();
+  ASSERT_TRUE(Eventually([&] { return writer->matched_readers() == 1 && reader->counters().matched_writers == 1; },
+                         kDiscoveryTimeout));
+  // Best effort: a sample may be lost, so keep writing until one arrives.
+  const msg::StokesSample sample = Sample("bench1", 7);
+  ASSERT_TRUE(Eventually([&] { return writer->Write(sample) && reader->counters().samples >= 1; }, kDiscoveryTimeout));
+  const std::vector<msg::StokesSample> samples = received.samples();
+  ASSERT_FALSE(samples.empty());
+  EXPECT_EQ(samples[0].bench_id().to_string(), "bench1");
+  EXPECT_EQ(samples[0].sequence_number(), 7u);
+  EXPECT_EQ(samples[0].sample_time_ns(), 700'000);
+  EXPECT_EQ(samples[0].s_out(), sample.s_out());
+  EXPECT_EQ(reader->counters().other_benches.load(), 0u);
+}
+
+TEST_F(BusParticipantTest, AReaderCountsAndSkipsSamplesOfAnotherBench) {
+  BusParticipant publishing(Options(kOtherBenchDomain, "dpc_bus_test_writer"));
+  BusParticipant subscribing(Options(kOtherBenchDomain, "dpc_bus_test_reader"));
+  Received received;
+  auto reader = subscribing.MakeReader<msg::StokesSample>(
+      "bench1", [&](const msg::StokesSample& m, const eprosima::fastdds::dds::SampleInfo&) { received.Add(m); });
+  auto writer = publishing.MakeWriter<msg::StokesSample>();
+  ASSERT_TRUE(Eventually([&] { return writer->matched_readers() == 1 && reader->counters().matched_writers == 1; },
+                         kDiscoveryTimeout));
+  const msg::StokesSample other = Sample("bench2", 100);
+  const msg::StokesSample own = Sample("bench1", 1);
+  ASSERT_TRUE(Eventually(
+      [&] {
+        writer->Write(other);
+        writer->Write(own);
+        return reader->counters().other_benches >= 1 && reader->counters().samples >= 1;
+      },
+      kDiscoveryTimeout));
+  const std::vector<msg::StokesSample> samples = received.samples();
+  ASSERT_FALSE(samples.empty());
+  for (const msg::StokesSample& m : samples) {
+    EXPECT_EQ(m.bench_id().to_string(), "bench1");
+    EXPECT_EQ(m.sequence_number(), 1u);
+  }
+}
+
+TEST_F(BusParticipantTest, ADomainOutOfTheDdsRangeIsRefusedBeforeAnyParticipant) {
+  for (int domain : {233, -1}) {
+    try {
+      BusParticipant participant(Options(domain, "dpc_bus_test"));
+      FAIL() << "domain " << domain << " accepted";
+    } catch (const BusError& e) {
+      EXPECT_NE(std::string(e.what()).find("domain " + std::to_string(domain)), std::string::npos) << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace dpc::bus
