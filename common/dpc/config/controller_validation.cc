@@ -128,16 +128,38 @@ void ValidateControllerOptions(const ControllerConfig& controller) {
 
 // ---- The controller as a whole.
 
+/// Laws whose update is μ times a (generalized) inverse of the task: scale-free, the task error
+/// contracts by (1 − μ) per update. The transpose and dithering laws scale with the device.
+bool ScaleFreeLaw(ControlMethod method) {
+  return method != ControlMethod::kTranspose && method != ControlMethod::kDither;
+}
+
 void ValidateController(const ControllerConfig& controller, int control_count,
                         const TargetConfig& target, const SimulationConfig& simulation) {
   RequirePositive(controller.step, "controller.step",
                   "the task step must be positive (typical 0.01 to 1)");
+  RequireAtMost(controller.step, kMaxStep, "controller.step", "the task step");
+  if (ScaleFreeLaw(controller.method) && !(controller.step < 2.0)) {
+    // e[k+1] = (1 − μ) e[k] even with a perfect model: |1 − μ| ≥ 1.
+    Fail("controller.step",
+         fmt::format("{} is not < 2; with method {} the task error is multiplied by (1 - step) on "
+                     "every update and the loop diverges (typical 0.01 to 1)",
+                     controller.step, MethodEnumName(controller.method)));
+  }
   RequireNonNegative(controller.nullspace_step, "controller.nullspace_step",
                      "the null-space step must be >= 0 (typical 0.01 to 1)");
+  if (!(controller.nullspace_step < 2.0)) {
+    Fail("controller.nullspace_step",
+         fmt::format("{} is not < 2; the null-space part of φ is multiplied by (1 - nullspace_step) "
+                     "on every update and diverges (typical 0.01 to 1)",
+                     controller.nullspace_step));
+  }
   RequireNonNegative(controller.threshold, "controller.threshold",
                      "the gpt threshold must be >= 0 control units (typical 1)");
+  RequireAtMost(controller.threshold, kMaxStep, "controller.threshold", "the gpt threshold");
   RequireNonNegative(controller.damping, "controller.damping",
                      "the damping must be >= 0 (typical 1e-4 to 1e-2)");
+  RequireAtMost(controller.damping, kMaxStep, "controller.damping", "the damping");
   if (controller.method == ControlMethod::kRegularizedLeastSquares && controller.damping == 0.0) {
     Fail("controller.damping",
          "0 with method RLS; regularized least squares needs damping > 0 (typical 1e-4 to 1e-2)");

@@ -35,7 +35,9 @@
 //                axes non-zero. transient_burst: start_s ≥ 0, duration_s > 0, period_s = 0 or
 //                ≥ duration_s.
 //   target       point: a unit Stokes vector. set n·S = c: |n| ≥ 1e-9, |c|/|n| < 1.
-//   controller   step > 0; nullspace_step, threshold, damping ≥ 0 (damping > 0 for rls);
+//   controller   0 < step ≤ 1e6, and < 2 for every law but transpose and dither (the error
+//                contracts by (1 − step) per update); 0 ≤ nullspace_step < 2; threshold,
+//                damping ∈ [0, 1e6] (damping > 0 for rls);
 //                singular_value_tolerance ∈ (0, 1); activation_s ∈ [0, duration_s);
 //                initial_phi empty or one value per control; inverse and damped need a square
 //                task (3 controls for a point target, 1 for a set); dither: amplitude > 0,
@@ -62,6 +64,9 @@ inline constexpr int64_t kMaxDelaySamples = 10'000'000;
 inline constexpr int64_t kMaxTotalSamples = 1'000'000'000'000;
 /// The highest sample rate accepted, Hz.
 inline constexpr double kMaxSampleRateHz = 1e10;
+/// The largest task step, gpt threshold and damping accepted for any law (the transpose and
+/// dithering laws' steps scale with the device; the others must be < 2).
+inline constexpr double kMaxStep = 1e6;
 /// The largest singularity damping λ0 and threshold ε accepted.
 inline constexpr double kMaxSingularityDamping = 1e3;
 /// The longest prediction window, horizon and lead accepted, in samples.

@@ -22,6 +22,30 @@ class ControllerValidationTest : public testing::ScenarioFixture {};
 
 // ---- The control law's settings.
 
+TEST_F(ControllerValidationTest, AnAbsurdStepIsRefusedForEveryLaw) {
+  scenario_.controller.step = 1e308;
+  EXPECT_EQ(ErrorLocation(), "controller.step");
+  scenario_.controller.method = ControlMethod::kTranspose;
+  EXPECT_EQ(ErrorLocation(), "controller.step");
+}
+
+TEST_F(ControllerValidationTest, AScaleFreeLawsStepIsBelowTwo) {
+  // gp: the task error is multiplied by (1 − μ) per update; μ = 2 never converges.
+  scenario_.controller.step = 2.0;
+  EXPECT_EQ(ErrorLocation(), "controller.step");
+  scenario_.controller.step = 1.99;
+  EXPECT_EQ(ErrorLocation(), "(valid)");
+  // The transpose law's step scales with the device's Jacobian: larger steps are legitimate.
+  scenario_.controller.method = ControlMethod::kTranspose;
+  scenario_.controller.step = 50.0;
+  EXPECT_EQ(ErrorLocation(), "(valid)");
+}
+
+TEST_F(ControllerValidationTest, TheNullspaceStepIsBelowTwo) {
+  scenario_.controller.nullspace_step = 2.0;
+  EXPECT_EQ(ErrorLocation(), "controller.nullspace_step");
+}
+
 TEST_F(ControllerValidationTest, NullspaceStepMustBeNonNegative) {
   scenario_.controller.nullspace_step = -0.1;
   EXPECT_EQ(ErrorLocation(), "controller.nullspace_step");
