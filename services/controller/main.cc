@@ -14,10 +14,17 @@
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/message_conversion.h"
 #include "dpc/config/scenario_validation.h"
+#include "log_limiter.h"
 #include "service.h"
 
 namespace dpc::services {
 namespace {
+
+/// "frozen" for "frozen: no sample for 25 ms", "tracking" for "tracking", …: what a condition is,
+/// without its figures.
+std::string ConditionKind(const std::string& condition) {
+  return condition.substr(0, condition.find_first_of(":(0123456789"));
+}
 
 class ControllerService final : public Service {
  public:
@@ -87,8 +94,11 @@ class ControllerService final : public Service {
           core_.TakeStatus(MonotonicNs(), WallClockNs(), samples_->counters().deadline_misses.load());
       status_writer_->Write(bus::StatusMessage(status, bench_id_));
       if (status.condition != last_condition) {
+        // A condition that changes within its kind ("frozen: no sample for 25 ms", … 45 ms) is
+        // logged at most every few seconds, with the count of changes it stands for.
         last_condition = status.condition;
-        spdlog::info("{}{}", last_condition, status.obeyed ? " (obeyed)" : "");
+        log_.Log(spdlog::level::info, ConditionKind(last_condition),
+                 last_condition + (status.obeyed ? " (obeyed)" : ""));
       }
     }
     return cli::ExitCode::kOk;
@@ -114,11 +124,12 @@ class ControllerService final : public Service {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!unreadable.empty()) {
       core_.OnUnusableDevice(unreadable);
-      spdlog::error("unusable device description: {}", unreadable);
+      log_.Log(spdlog::level::err, "unusable device", "unusable device description: " + unreadable);
     } else if (std::string error = core_.OnDevice(description); !error.empty()) {
-      spdlog::error("{}", error);
+      log_.Log(spdlog::level::err, "unusable device", error);
     } else {
-      spdlog::info("device: {} stages from driver {}", description.stages.size(), description.driver_id);
+      log_.Log(spdlog::level::info, "device",
+               fmt::format("device: {} stages from driver {}", description.stages.size(), description.driver_id));
     }
   }
 
@@ -128,11 +139,11 @@ class ControllerService final : public Service {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!unreadable.empty()) {
       core_.OnUnusableTarget(unreadable);
-      spdlog::error("unusable target: {}", unreadable);
+      log_.Log(spdlog::level::err, "unusable target", "unusable target: " + unreadable);
     } else if (std::string error = core_.OnTarget(target); !error.empty()) {
-      spdlog::error("{}", error);
+      log_.Log(spdlog::level::err, "unusable target", error);
     } else {
-      spdlog::info("target revision {}", target.revision);
+      log_.Log(spdlog::level::info, "target", fmt::format("target revision {}", target.revision));
     }
   }
 
@@ -168,6 +179,7 @@ class ControllerService final : public Service {
   BenchSample sample_;
   msg::WaveplateCommand command_message_;  ///< written in place: no allocation per command
   RejectionLog rejections_{"rejected sample or state"};
+  LogLimiter log_;  ///< under mutex_ (the status loop holds it too)
   bus::BusParticipant participant_;
   std::unique_ptr<bus::Writer<msg::WaveplateCommand>> command_writer_;
   std::unique_ptr<bus::Writer<msg::ControllerStatus>> status_writer_;

@@ -16,6 +16,7 @@
 #include "dpc/config/scenario_builders.h"
 #include "dpc/config/scenario_validation.h"
 #include "driver_core.h"
+#include "log_limiter.h"
 #include "service.h"
 #include "target_authority.h"
 
@@ -44,10 +45,11 @@ class DriverService final : public Service {
                    "the device's own limit; a value above it is cut to it)")
         ->check(CLI::NonNegativeNumber)->capture_default_str();
     app.add_option("--min-silence-s", s.min_silence_s,
-                   "The obeyed controller is dead when another answered a sample it did not this long ago "
-                   "(or --silence-intervals of its command interval, if longer): fail over. If "
-                   "nobody answers for this long (no samples, no other controller), hold; the "
-                   "controller obeyed before gets control back first")
+                   "The obeyed controller is dead when another answered a sample it did not and it stayed "
+                   "silent this long since (or 1.5 of its command intervals, if longer): fail over. "
+                   "If nobody answers for this long or --silence-intervals of the command interval "
+                   "(no samples, no other controller), hold; the controller obeyed before gets "
+                   "control back first")
         ->check(CLI::Range(1e-4, 10.0))->capture_default_str();
     app.add_option("--silence-intervals", s.silence_intervals, "Silence timeout in command intervals")
         ->check(CLI::Range(2.0, 1000.0))->capture_default_str();
@@ -131,12 +133,12 @@ class DriverService final : public Service {
     bus::WriteState(state, bench_id_, &state_message_);
     state_writer_->Write(state_message_);
     if (state.reason != last_reason_) {
+      // Keyed by what the driver does (holds, or obeys whom): a reason that only changes its
+      // figures is logged at most every few seconds, with the count it stands for.
       last_reason_ = state.reason;
-      if (state.mode == DriverMode::kHolding) {
-        spdlog::warn("{}", last_reason_);
-      } else {
-        spdlog::info("{}", last_reason_);
-      }
+      const bool holding = state.mode == DriverMode::kHolding;
+      log_.Log(holding ? spdlog::level::warn : spdlog::level::info,
+               holding ? std::string("holding") : "obeying " + state.obeyed_controller_id, last_reason_);
     }
   }
 
@@ -145,7 +147,7 @@ class DriverService final : public Service {
     if (!bus::ReadSample(message, &sample).empty()) return;  // the controllers report those
     std::lock_guard<std::mutex> lock(mutex_);
     if (core_.OnSample(sample.sequence, sample.time_ns, sample.publish_time_ns)) {
-      spdlog::info("the bench started a new run (sample {})", sample.sequence);
+      log_.Log(spdlog::level::info, "new run", fmt::format("the bench started a new run (sample {})", sample.sequence));
     }
   }
 
@@ -173,7 +175,8 @@ class DriverService final : public Service {
       target_writer_->Write(bus::TargetMessage(targets_.current(), bench_id_));
       spdlog::info("target revision {} (request {})", reply.revision, request_id);
     } else {
-      spdlog::warn("refused target request {}: {}", request_id, reply.message);
+      log_.Log(spdlog::level::warn, "refused target request",
+               fmt::format("refused target request {}: {}", request_id, reply.message));
     }
     msg::TargetReply out;
     out.bench_id(bench_id_);
@@ -195,6 +198,7 @@ class DriverService final : public Service {
   msg::WaveplateState state_message_;  ///< written in place: no allocation per state
   std::string last_reason_;
   RejectionLog rejections_{"rejected command"};
+  LogLimiter log_;  ///< under mutex_
   bus::BusParticipant participant_;
   std::unique_ptr<bus::Writer<msg::WaveplateState>> state_writer_;
   std::unique_ptr<bus::Writer<msg::DeviceDescription>> device_writer_;

@@ -119,11 +119,13 @@ void DdsBenchLink::OnState(const msg::WaveplateState& message) {
 
 void DdsBenchLink::OnTarget(const msg::Target& message) {
   BenchTarget target;
-  if (std::string reason = bus::ReadTarget(message, &target); !reason.empty()) {
-    spdlog::warn("rejected target revision {}: {}", message.revision(), reason);
+  const std::string reason = bus::ReadTarget(message, &target);
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!reason.empty()) {
+    log_.Log(spdlog::level::warn, "rejected target",
+             fmt::format("rejected target revision {}: {}", message.revision(), reason));
     return;
   }
-  std::lock_guard<std::mutex> lock(mutex_);
   if (target.revision > target_revision_) {
     target_revision_ = target.revision;
     target_change_ = target.target;

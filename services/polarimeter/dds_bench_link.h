@@ -13,6 +13,7 @@
 
 #include "bench_core.h"
 #include "dpc/bus/bus_participant.h"
+#include "log_limiter.h"
 #include "loop_latency.h"
 #include "service_runtime.h"
 
@@ -64,6 +65,7 @@ class DdsBenchLink final : public BenchLink {
   uint64_t rejected_states_ = 0;
   LoopLatencyRecorder latency_;  ///< this run's samples, after the warm-up
   RejectionLog rejections_{"rejected state"};
+  LogLimiter log_;  ///< under mutex_
 };
 
 }  // namespace dpc::services

@@ -1,0 +1,68 @@
+#include "log_limiter.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include <spdlog/sinks/ostream_sink.h>
+
+namespace dpc::services {
+namespace {
+
+using namespace std::chrono_literals;
+
+/// The default logger writes into `lines_` while the test runs.
+class LogLimiterTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    previous_ = spdlog::default_logger();
+    auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(lines_);
+    auto logger = std::make_shared<spdlog::logger>("log_limiter_test", sink);
+    logger->set_pattern("%l %v");
+    spdlog::set_default_logger(logger);
+  }
+  void TearDown() override { spdlog::set_default_logger(previous_); }
+
+  int64_t now_ns_ = 1'000'000'000;
+  LogLimiter limiter_{5s, [this] { return now_ns_; }};
+  std::ostringstream lines_;
+  std::shared_ptr<spdlog::logger> previous_;
+};
+
+TEST_F(LogLimiterTest, TheFirstLineOfAKeyIsLoggedRepeatsWithinTheIntervalAreCounted) {
+  EXPECT_TRUE(limiter_.Log(spdlog::level::warn, "frozen", "frozen: no sample for 25 ms"));
+  for (int i = 0; i < 49; ++i) {
+    now_ns_ += 20'000'000;  // a status every 20 ms
+    EXPECT_FALSE(limiter_.Log(spdlog::level::warn, "frozen", "frozen: no sample for more"));
+  }
+  EXPECT_EQ(limiter_.suppressed("frozen"), 49u);
+  EXPECT_EQ(lines_.str(), "warning frozen: no sample for 25 ms\n");
+  // 5 s after the first line the next one says how many it stands for.
+  now_ns_ = 1'000'000'000 + 5'000'000'000;
+  EXPECT_TRUE(limiter_.Log(spdlog::level::warn, "frozen", "frozen: no sample for 5025 ms"));
+  EXPECT_NE(lines_.str().find("frozen: no sample for 5025 ms (49 more like this in the last 5.0 s)"),
+            std::string::npos)
+      << lines_.str();
+  EXPECT_EQ(limiter_.suppressed("frozen"), 0u);
+}
+
+TEST_F(LogLimiterTest, AnotherKeyIsLoggedAtOnce) {
+  EXPECT_TRUE(limiter_.Log(spdlog::level::info, "tracking", "tracking"));
+  EXPECT_TRUE(limiter_.Log(spdlog::level::warn, "frozen", "frozen: no sample for 25 ms"));
+  EXPECT_FALSE(limiter_.Log(spdlog::level::info, "tracking", "tracking"));
+  EXPECT_EQ(lines_.str(), "info tracking\nwarning frozen: no sample for 25 ms\n");
+}
+
+TEST_F(LogLimiterTest, KeepsABoundedNumberOfKeys) {
+  for (size_t i = 0; i < 10 * LogLimiter::kMaxKeys; ++i) {
+    now_ns_ += 1000;
+    EXPECT_TRUE(limiter_.Log(spdlog::level::info, "key " + std::to_string(i), "line"));
+  }
+  // The first key was forgotten long ago: it logs again at once.
+  EXPECT_TRUE(limiter_.Log(spdlog::level::info, "key 0", "line"));
+}
+
+}  // namespace
+}  // namespace dpc::services
