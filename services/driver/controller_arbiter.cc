@@ -21,16 +21,17 @@ int64_t ControllerArbiter::SilenceTimeoutNs(const Record& record) const {
 
 ControllerArbiter::Liveness ControllerArbiter::Judge(const Record& record, int64_t now_ns) const {
   if (record.commands == 0) return Liveness::kSilent;
-  const int64_t timeout_ns = SilenceTimeoutNs(record);
-  if (now_ns - record.last_command_ns <= timeout_ns) return Liveness::kAlive;
-  if (Lag(record) == 0) return Liveness::kSilent;
-  // Silent, and others answered newer samples: dead, unless they only just started again
-  // (after a stall of the bench or of this driver, whoever's queued command comes first).
-  return now_ns - BehindSinceNs(record) > BehindGraceNs(record) ? Liveness::kBehind : Liveness::kAlive;
+  // Others answered newer samples while it said nothing for the grace: dead. (Not while it
+  // answers: a controller one sample behind all the time answers every sample.)
+  if (Lag(record) > 0 && now_ns >= BehindDueNs(record)) return Liveness::kBehind;
+  if (now_ns - record.last_command_ns <= SilenceTimeoutNs(record)) return Liveness::kAlive;
+  return Lag(record) == 0 ? Liveness::kSilent : Liveness::kAlive;
 }
 
-int64_t ControllerArbiter::BehindGraceNs(const Record& record) const {
-  return std::max<int64_t>(SilenceTimeoutNs(record) / 4, static_cast<int64_t>(4.0 * record.mean_interval_ns));
+int64_t ControllerArbiter::BehindDueNs(const Record& record) const {
+  const int64_t grace_ns =
+      static_cast<int64_t>(std::max(settings_.min_silence_s * 1e9, kBehindGraceIntervals * record.mean_interval_ns));
+  return std::max(BehindSinceNs(record), record.last_command_ns) + grace_ns;
 }
 
 int64_t ControllerArbiter::BehindSinceNs(const Record& record) const {
@@ -96,21 +97,30 @@ int32_t ControllerArbiter::obeyed_priority() const {
   return obeyed_.empty() ? 0 : controllers_.at(obeyed_).priority;
 }
 
-ControllerArbiter::Record& ControllerArbiter::RecordOf(const std::string& id) {
+ControllerArbiter::Record* ControllerArbiter::RecordOf(const std::string& id, int64_t now_ns) {
   auto found = controllers_.find(id);
-  if (found != controllers_.end()) return found->second;
+  if (found != controllers_.end()) return &found->second;
   if (controllers_.size() >= kMaxControllers) {
-    auto oldest = std::min_element(controllers_.begin(), controllers_.end(), [](const auto& a, const auto& b) {
-      return a.second.last_command_ns < b.second.last_command_ns;
-    });
-    if (oldest->first != obeyed_) controllers_.erase(oldest);
+    // Room only in place of a controller that is neither obeyed nor alive.
+    auto victim = controllers_.end();
+    for (auto it = controllers_.begin(); it != controllers_.end(); ++it) {
+      if (it->first == obeyed_ || it->first == suspended_ || Alive(it->second, now_ns)) continue;
+      if (victim == controllers_.end() || it->second.last_command_ns < victim->second.last_command_ns) victim = it;
+    }
+    if (victim == controllers_.end()) return nullptr;
+    controllers_.erase(victim);
   }
-  return controllers_.emplace(id, Record{}).first->second;
+  return &controllers_.emplace(id, Record{}).first->second;
 }
 
 ControllerArbiter::Verdict ControllerArbiter::OnCommand(const std::string& id, int32_t priority,
                                                         uint64_t answers_sample, int64_t now_ns) {
-  Record& record = RecordOf(id);
+  Record* found = RecordOf(id, now_ns);
+  if (found == nullptr) {
+    ++refused_;
+    return Verdict::kRefuse;
+  }
+  Record& record = *found;
   if (record.commands > 0) {
     const double interval = static_cast<double>(now_ns - record.last_command_ns);
     record.mean_interval_ns = record.commands == 1 ? interval
@@ -177,7 +187,7 @@ int64_t ControllerArbiter::NextCheckNs() const {
   const Record& record = controllers_.at(obeyed_);
   const int64_t silent_due_ns = record.last_command_ns + SilenceTimeoutNs(record) + 1;
   if (Lag(record) == 0) return silent_due_ns;
-  return std::max(silent_due_ns, BehindSinceNs(record) + BehindGraceNs(record) + 1);
+  return BehindDueNs(record);  // silent but behind: alive until then
 }
 
 }  // namespace dpc::services

@@ -1,28 +1,27 @@
 #pragma once
 // Which controller the waveplate driver obeys. Every controller publishes a command for every
 // sample; the driver obeys exactly one: the highest-priority controller that is alive (ties:
-// the one already obeyed). A controller's silence timeout is
-//
-//   timeout = max(min_silence_s, silence_intervals × its mean command interval)
-//
-// (the interval is an exponential average of its command arrivals). The obeyed controller is
-// judged by its silence and by the other controllers' answers (each command names the sample
-// it answers):
-//   - silent for its timeout while another controller answered a sample it has not (for
-//     longer than a grace: a quarter of the timeout, at least 4 command intervals): dead; the
-//     driver switches to the next alive controller, or holds. At 10 kHz a killed controller is
-//     noticed ~1.5 ms after its last command, where the DDS deadline (≥ 10 ms on Fast DDS 2.9)
-//     would take about ten times longer;
-//   - silent for its timeout and nobody answered anything newer: no samples, or the whole
+// the one already obeyed). The obeyed controller is judged by the other controllers' answers
+// (each command names the sample it answers) and by its silence:
+//   - behind: another controller answered a sample it has not, and it has been silent for the
+//     grace since then (grace = max(min_silence_s, 1.5 × its mean command interval), counted
+//     from its own last command if that is later): dead. The driver switches to the next alive
+//     controller, or holds. Below ~1.2 kHz the grace does not grow with the sample period: a
+//     controller killed at 2 kHz is replaced ~1.2 ms after the standby answered the first
+//     sample it missed, as at 10 kHz (the DDS deadline, ≥ 10 ms on Fast DDS 2.9, would take
+//     about ten times longer); at slower rates the gap stays within ~2.5 periods;
+//   - silent: nobody answered anything newer for its silence timeout,
+//       timeout = max(min_silence_s, silence_intervals × its mean command interval)
+//     (the interval an exponential average of its command arrivals): no samples, or the whole
 //     machine stalled; nobody's failure. The driver holds and gives it control back first:
-//     until it falls behind as above, another controller's command gets a holding answer
-//     (a lockstep bench still advances) instead of control. Without this, whichever command
-//     came first after a stall took over, and the primary took back over at once.
+//     until it falls behind as above, another controller's command gets a holding answer (a
+//     lockstep bench still advances) instead of control. Without this, whichever command came
+//     first after a stall took over, and the primary took back over at once.
 // Check() runs when the next such deadline is due (NextCheckNs).
 //
-// Bounded: at most kMaxControllers records (the longest-silent is dropped for a new one), and
-// the first answers of the latest kAnswerRing samples; no number a command carries makes it
-// loop or overflow.
+// Bounded: at most kMaxControllers records (a newcomer beyond them is refused while every
+// known controller is alive; else the longest-silent record makes room), and the first answers
+// of the latest kAnswerRing samples; no number a command carries makes it loop or overflow.
 
 #include <array>
 #include <cstdint>
@@ -34,10 +33,13 @@ namespace dpc::services {
 class ControllerArbiter {
  public:
   struct Settings {
-    double min_silence_s = 1.5e-3;   ///< shortest silence that counts as a dead controller
-    double silence_intervals = 8.0;  ///< or this many of its command intervals, if longer
+    double min_silence_s = 1.2e-3;   ///< the grace of a controller behind the others (see above)
+    double silence_intervals = 8.0;  ///< a silence of nobody longer than this many intervals: hold
   };
   static constexpr size_t kMaxControllers = 64;
+  /// The grace of a controller behind the others, in its command intervals, if longer than
+  /// min_silence_s.
+  static constexpr double kBehindGraceIntervals = 1.5;
   static constexpr size_t kAnswerRing = 1024;
 
   /// What to do with a command.
@@ -46,6 +48,7 @@ class ControllerArbiter {
     kAnswerOnly,  ///< holding for the controller obeyed before a general silence: answer its
                   ///< sample (a lockstep bench waits for it), apply nothing
     kIgnore,      ///< a standby controller's
+    kRefuse,      ///< a new controller beyond kMaxControllers while every known one is alive
   };
 
   explicit ControllerArbiter(Settings settings);
@@ -67,6 +70,8 @@ class ControllerArbiter {
   bool holding() const { return obeyed_.empty(); }
   int32_t obeyed_priority() const;
   uint64_t switches() const { return switches_; }
+  /// Commands of new controllers refused for want of room (kRefuse).
+  uint64_t refused() const { return refused_; }
   /// Why it obeys whom it obeys, or why it holds.
   const std::string& reason() const { return reason_; }
 
@@ -78,9 +83,9 @@ class ControllerArbiter {
     uint64_t commands = 0;
     uint64_t last_answered = 0;       ///< the newest sample it answered
   };
-  /// Silent for longer than its timeout and: kBehind (dead), another controller answered a
-  /// sample it has not, longer ago than the grace; kSilent, nobody answered anything newer.
-  /// Otherwise kAlive.
+  /// kBehind (dead): another controller answered a sample it has not, and it has been silent
+  /// for the grace since then; kSilent: silent for its timeout and nobody answered anything
+  /// newer. Otherwise kAlive.
   enum class Liveness { kAlive, kBehind, kSilent };
   struct FirstAnswer {
     uint64_t sample = 0;
@@ -94,13 +99,15 @@ class ControllerArbiter {
   /// When another controller first answered the oldest sample `record` has not answered (very
   /// long ago if that is too old to remember). Only for Lag(record) > 0.
   int64_t BehindSinceNs(const Record& record) const;
-  int64_t BehindGraceNs(const Record& record) const;
+  /// When it counts as behind: the grace after the later of BehindSinceNs and its last command.
+  int64_t BehindDueNs(const Record& record) const;
   int64_t SilenceTimeoutNs(const Record& record) const;
   /// "<id> silent for X ms, N samples behind".
   std::string DescribeBehind(const std::string& id, const Record& record, int64_t now_ns) const;
   void NoteAnswer(Record* record, uint64_t answers_sample, int64_t now_ns);
-  /// The record of `id`, made (and the longest-silent one dropped at the limit) if new.
-  Record& RecordOf(const std::string& id);
+  /// The record of `id`, made if new (at the limit, in place of the longest-silent record that
+  /// is not alive nor obeyed); nullptr if there is no room.
+  Record* RecordOf(const std::string& id, int64_t now_ns);
   /// The best alive controller other than `excluded`, or "" if none.
   std::string BestAlive(int64_t now_ns, const std::string& excluded) const;
   void Obey(const std::string& id, std::string reason);
@@ -113,6 +120,7 @@ class ControllerArbiter {
   std::string suspended_;
   std::string reason_ = "holding: no controller yet";
   uint64_t switches_ = 0;
+  uint64_t refused_ = 0;
   uint64_t newest_answered_ = 0;     ///< the newest sample any controller answered
   std::array<FirstAnswer, kAnswerRing> first_answers_{};  ///< by sample number modulo the ring
 };

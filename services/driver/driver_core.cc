@@ -109,15 +109,33 @@ std::optional<DriverState> DriverCore::OnCommand(const ControllerCommand& comman
   }
 
   switch (arbiter_.OnCommand(id, command.priority, command.answers_sample, now_ns)) {
+    case ControllerArbiter::Verdict::kRefuse:
+      Reject(id, fmt::format("{} controllers already on this bench", ControllerArbiter::kMaxControllers));
+      return std::nullopt;
     case ControllerArbiter::Verdict::kIgnore:
+      KeepStandbyCommand(command);
       return std::nullopt;
     case ControllerArbiter::Verdict::kAnswerOnly:
+      KeepStandbyCommand(command);
       Answer(command.answers_sample, wall_ns);
       return Publishable(wall_ns);
     case ControllerArbiter::Verdict::kObey:
       break;
   }
+  standby_commands_.erase(id);
+  return Apply(command, now_ns, wall_ns);
+}
 
+void DriverCore::KeepStandbyCommand(const ControllerCommand& command) {
+  if (standby_commands_.size() >= ControllerArbiter::kMaxControllers &&
+      !standby_commands_.count(command.controller_id)) {
+    standby_commands_.clear();  // only the controllers that still send come back
+  }
+  standby_commands_[command.controller_id] = command;
+}
+
+DriverState DriverCore::Apply(const ControllerCommand& command, int64_t now_ns, int64_t wall_ns) {
+  const std::string& id = command.controller_id;
   // Apply: clamp to the ranges, then limit the slew over the driver's own time since the last
   // applied command (never the command's timestamps), from where the current motion has the
   // waveplates at this command's time.
@@ -180,7 +198,18 @@ std::optional<DriverState> DriverCore::Tick(int64_t now_ns, int64_t wall_ns) {
     if (!arbiter_.Check(now_ns)) return std::nullopt;
     // The obeyed controller fell silent: another one is obeyed, or the driver holds.
     saturated_.fill(false);
-    if (arbiter_.holding()) StopMotion();
+    if (arbiter_.holding()) {
+      StopMotion();
+      return Publishable(wall_ns);
+    }
+    // Failover: the new controller's latest command is applied now, not at its next one (a
+    // sample period later), if it answers a sample the bench still knows.
+    const auto latest = standby_commands_.find(arbiter_.obeyed());
+    if (latest != standby_commands_.end() && timeline_.Find(latest->second.answers_sample)) {
+      const ControllerCommand command = latest->second;
+      standby_commands_.erase(latest);
+      return Apply(command, now_ns, wall_ns);
+    }
     return Publishable(wall_ns);
   }
   // Holding: a controller that became alive is obeyed on its next command; the heartbeat keeps

@@ -4,7 +4,9 @@
 //
 // Which controller it obeys is the ControllerArbiter's decision (controller_arbiter.h): the
 // alive controller of highest priority, judged by its silence and the other controllers'
-// answers. Tick() runs when the arbiter's next deadline (or the holding heartbeat) is due.
+// answers. Tick() runs when the arbiter's next deadline (or the holding heartbeat) is due; when
+// it fails over, the new controller's latest command (kept for every standby) is applied at
+// once, so the gap does not grow by a sample period.
 //
 // Every command is checked (its shape at the service's edge, bus::ReadCommand: stage count,
 // NaN/Inf, oversized; here against the driver's own record of the bench's samples,
@@ -46,7 +48,7 @@ namespace dpc::services {
 struct DriverSettings {
   std::string driver_id = "driver";
   double max_slew_per_s = 0.0;        ///< φ units per second; 0: the device's own limit
-  double min_silence_s = 1.5e-3;      ///< shortest silence that counts as a dead controller
+  double min_silence_s = 1.2e-3;      ///< the grace of a controller behind the others (ControllerArbiter)
   double silence_intervals = 8.0;     ///< or this many of its command intervals, if longer
   double holding_state_period_s = 5e-3;  ///< state heartbeat while holding
   double max_ramp_s = 2e-3;           ///< a command's rate moves φ for at most this (bench time)
@@ -107,6 +109,10 @@ class DriverCore {
   void Answer(uint64_t sample, int64_t wall_ns);
   /// Sets the backend's motion to where it ends, with no rate (holding).
   void StopMotion();
+  /// Clamps, slew-limits and applies the obeyed controller's command; the state to publish.
+  DriverState Apply(const ControllerCommand& command, int64_t now_ns, int64_t wall_ns);
+  /// Remembers a standby's latest command: applied at once if the standby takes over.
+  void KeepStandbyCommand(const ControllerCommand& command);
 
   WaveplateChain chain_;
   DriverSettings settings_;
@@ -115,6 +121,7 @@ class DriverCore {
   SampleTimeline timeline_;            ///< the bench's samples, as the polarimeter published them
   double max_slew_per_s_ = 0.0;        ///< the device's limit, or the setting if lower
   ControllerArbiter arbiter_;
+  std::map<std::string, ControllerCommand> standby_commands_;  ///< each standby's latest
   WaveplateMotion applied_;         ///< what the backend does (its Applied())
   std::array<bool, kMaxControls> saturated_{};
   int64_t last_applied_ns_ = 0;       ///< the driver's clock when the last command was applied

@@ -13,7 +13,7 @@ using Verdict = ControllerArbiter::Verdict;
 
 class ControllerArbiterTest : public ::testing::Test {
  protected:
-  ControllerArbiter arbiter_{ControllerArbiter::Settings{}};  // 1.5 ms, 8 intervals
+  ControllerArbiter arbiter_{ControllerArbiter::Settings{}};  // 1.2 ms, 8 intervals
 
   /// Primary (priority 10) and standby (0) answer samples first … last at 10 kHz. Returns the
   /// time of the last sample.
@@ -64,19 +64,51 @@ TEST_F(ControllerArbiterTest, FailsOverWhenTheStandbyAnsweredSamplesThePrimaryDi
       }
     }
   }
-  // Silence timeout max(1.5 ms, 8 × 0.1 ms) = 1.5 ms while the standby answered newer samples.
+  // The grace max(1.2 ms, 1.5 × 0.1 ms) after the standby answered sample 51 (at 5.025 ms),
+  // the first one the primary did not: 1.325 ms after the primary's last command.
+  const int64_t first_unanswered = last_primary + 125 * kUs;
   ASSERT_GT(switched_at, 0);
-  EXPECT_GT(switched_at - last_primary, 1500 * kUs);
-  EXPECT_LE(switched_at - last_primary, 1550 * kUs);
+  EXPECT_GE(switched_at - first_unanswered, 1200 * kUs);
+  EXPECT_LE(switched_at - first_unanswered, 1225 * kUs);
   EXPECT_EQ(arbiter_.obeyed(), "standby");
-  EXPECT_NE(arbiter_.reason().find("primary silent for 1.5"), std::string::npos) << arbiter_.reason();
+  EXPECT_NE(arbiter_.reason().find("primary silent for 1.32 ms"), std::string::npos) << arbiter_.reason();
   EXPECT_NE(arbiter_.reason().find("samples behind"), std::string::npos) << arbiter_.reason();
 }
 
 TEST_F(ControllerArbiterTest, TheNextCheckIsDueWhenTheObeyedControllersTimeoutEnds) {
-  BothAnswer(1, 50);
-  EXPECT_EQ(arbiter_.NextCheckNs(), 49 * 100 * kUs + 1500 * kUs + 1);
-  EXPECT_FALSE(arbiter_.Check(49 * 100 * kUs + 1500 * kUs));
+  const int64_t last = BothAnswer(1, 50);
+  // Nobody answered anything newer: its silence timeout, max(1.2 ms, 8 × 0.1 ms).
+  EXPECT_EQ(arbiter_.NextCheckNs(), last + 1200 * kUs + 1);
+  EXPECT_FALSE(arbiter_.Check(last + 1200 * kUs));
+}
+
+TEST_F(ControllerArbiterTest, TheNextCheckIsDueWhenTheObeyedControllersGraceEndsAfterTheOthersAnswered) {
+  const int64_t last = BothAnswer(1, 50);
+  const int64_t standby_answered = last + 100 * kUs;
+  arbiter_.OnCommand("standby", 0, 51, standby_answered);
+  EXPECT_EQ(arbiter_.NextCheckNs(), standby_answered + 1200 * kUs);
+  EXPECT_FALSE(arbiter_.Check(standby_answered + 1200 * kUs - 1));
+  EXPECT_EQ(arbiter_.obeyed(), "primary");
+  EXPECT_TRUE(arbiter_.Check(standby_answered + 1200 * kUs));
+  EXPECT_EQ(arbiter_.obeyed(), "standby");
+}
+
+TEST_F(ControllerArbiterTest, AtSlowRatesTheGraceIsOneAndAHalfCommandIntervals) {
+  // At 100 Hz a primary answering 5 ms after the standby is slower, not dead.
+  int64_t t = 0;
+  for (int k = 1; k <= 50; ++k) {
+    t = (k - 1) * 10 * kMs;
+    arbiter_.OnCommand("standby", 0, k, t);
+    if (k > 2) EXPECT_FALSE(arbiter_.Check(t + 4 * kMs));  // once the intervals are known
+    arbiter_.OnCommand("primary", 10, k, t + 5 * kMs);
+    ASSERT_EQ(arbiter_.obeyed(), "primary") << "sample " << k;
+  }
+  // Killed after sample 50: the standby answers 51 at t + 10 ms; the grace is 15 ms from then.
+  arbiter_.OnCommand("standby", 0, 51, t + 10 * kMs);
+  EXPECT_FALSE(arbiter_.Check(t + 10 * kMs + 15 * kMs - 1 * kUs));
+  arbiter_.OnCommand("standby", 0, 52, t + 20 * kMs);
+  EXPECT_TRUE(arbiter_.Check(t + 10 * kMs + 15 * kMs + 1 * kUs));
+  EXPECT_EQ(arbiter_.obeyed(), "standby");
 }
 
 TEST_F(ControllerArbiterTest, AStandbyOneSampleAheadAllTheTimeIsNoFailure) {
@@ -109,8 +141,7 @@ TEST_F(ControllerArbiterTest, AStallOfEveryoneHoldsThenGivesControlBackToTheSame
 
 TEST_F(ControllerArbiterTest, ASuspendedControllerThatFellBehindLosesItsPlace) {
   // Holding for "only" after a general silence; "next" starts at 10 kHz. Once "next" has
-  // answered samples "only" did not for the grace (a quarter of the 1.5-ms timeout), it is
-  // obeyed.
+  // answered samples "only" did not for the grace (1.2 ms), it is obeyed.
   arbiter_.OnCommand("only", 0, 1, 0);
   ASSERT_TRUE(arbiter_.Check(3 * kMs));
   ASSERT_TRUE(arbiter_.holding());
@@ -120,8 +151,8 @@ TEST_F(ControllerArbiterTest, ASuspendedControllerThatFellBehindLosesItsPlace) {
     if (arbiter_.OnCommand("next", 0, k, t) == Verdict::kObey) obeyed_at = t;
   }
   EXPECT_EQ(arbiter_.obeyed(), "next");
-  EXPECT_GT(obeyed_at - 20 * kMs, 375 * kUs);
-  EXPECT_LE(obeyed_at - 20 * kMs, 400 * kUs);
+  EXPECT_GE(obeyed_at - 20 * kMs, 1200 * kUs);
+  EXPECT_LE(obeyed_at - 20 * kMs, 1300 * kUs);
   EXPECT_NE(arbiter_.reason().find("only silent"), std::string::npos) << arbiter_.reason();
 }
 

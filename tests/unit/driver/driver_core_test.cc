@@ -7,60 +7,12 @@
 #include <optional>
 
 #include "dpc/config/scenario_config.h"
+#include "driver_core_support.h"
 
 namespace dpc::services {
 namespace {
 
-constexpr int64_t kUs = 1000;
-constexpr int64_t kMs = 1000 * kUs;
-
-ControlVector Controls(const std::vector<double>& values) {
-  ControlVector out(static_cast<Eigen::Index>(values.size()));
-  for (size_t i = 0; i < values.size(); ++i) out[static_cast<Eigen::Index>(i)] = values[i];
-  return out;
-}
-
-ControllerCommand Command(const std::string& id, int priority, std::vector<double> phi, uint64_t sample,
-                          int64_t sample_time_ns = 0) {
-  ControllerCommand c;
-  c.controller_id = id;
-  c.priority = priority;
-  c.answers_sample = sample;
-  c.sample_time_ns = sample_time_ns;
-  c.phi = Controls(phi);
-  return c;
-}
-
-// What a state says, as plain vectors.
-std::vector<double> Phi(const DriverState& state) {
-  return std::vector<double>(state.motion.phi.data(), state.motion.phi.data() + state.motion.phi.size());
-}
-std::vector<double> Rates(const DriverState& state) {
-  if (!state.motion.moving) return {};
-  return std::vector<double>(state.motion.rate_per_s.data(),
-                             state.motion.rate_per_s.data() + state.motion.rate_per_s.size());
-}
-std::vector<bool> Saturated(const DriverState& state) {
-  return std::vector<bool>(state.saturated.begin(), state.saturated.begin() + state.control_count());
-}
-int64_t RampEnd(const DriverState& state) { return state.motion.moving ? state.motion.end_ns : state.motion.start_ns; }
-
-/// The bench publishes the sample a command answers (if it is newer than any so far), then the
-/// command arrives: what the driver sees on a running bench.
-std::optional<DriverState> Send(DriverCore& core, const ControllerCommand& command, int64_t now_ns,
-                                int64_t wall_ns) {
-  if (command.answers_sample > core.newest_sample()) {
-    core.OnSample(command.answers_sample, command.sample_time_ns, wall_ns);
-  }
-  return core.OnCommand(command, now_ns, wall_ns);
-}
-
-class DriverCoreTest : public ::testing::Test {
- protected:
-  DriverCoreTest() : backend_(ControlVector::Zero(3)), core_(StagesFromAxes("131"), DriverSettings{}, &backend_) {}
-  SimulatedWaveplates backend_;
-  DriverCore core_;
-};
+using namespace dpc::services::testing;
 
 TEST_F(DriverCoreTest, StartsHoldingWithTheBackendsPhi) {
   const DriverState state = core_.State(0);
@@ -99,132 +51,6 @@ TEST_F(DriverCoreTest, AnswersTheObeyedControllersMalformedCommandWithoutApplyin
   EXPECT_EQ(core_.commands_rejected(), 3u);
   EXPECT_EQ(core_.obeyed(), "A");
   EXPECT_EQ(backend_.Applied().phi, Controls({0.1, 0.2, 0.3}));
-}
-
-TEST_F(DriverCoreTest, HigherPriorityTakesOverLowerIsIgnored) {
-  ASSERT_TRUE(Send(core_, Command("low", 0, {0.1, 0.1, 0.1}, 1), 1 * kMs, 0));
-  auto state = Send(core_, Command("high", 5, {0.2, 0.2, 0.2}, 1), 1 * kMs + 10 * kUs, 0);
-  ASSERT_TRUE(state.has_value());
-  EXPECT_EQ(state->obeyed_controller_id, "high");
-  EXPECT_EQ(state->controller_switches, 2u);
-  EXPECT_FALSE(Send(core_, Command("low", 0, {0.9, 0.9, 0.9}, 2), 1 * kMs + 100 * kUs, 0));
-  EXPECT_EQ(backend_.Applied().phi, ControlVector::Constant(3, 0.2));
-}
-
-// Primary and standby answer samples 1 … 50 at 10 kHz (t = 0 … 4.9 ms), then the primary dies.
-// Returns the time of the last sample.
-int64_t TwoControllersAnswer(DriverCore* core, int first, int last) {
-  int64_t t = 0;
-  for (int k = first; k <= last; ++k) {
-    t = (k - 1) * 100 * kUs;
-    Send(*core, Command("primary", 10, {0.1, 0.1, 0.1}, k), t, 0);
-    Send(*core, Command("standby", 0, {0.1, 0.1, 0.1}, k), t + 10 * kUs, 0);
-  }
-  return t;
-}
-
-// The standby goes on at 10 kHz after the primary's last command at 4.9 ms; Tick every 25 µs.
-// Returns when and by which state the driver switched (-1 if it did not by sample 100).
-int64_t FailoverTime(DriverCore* core, std::optional<DriverState>* switch_state) {
-  for (int k = 51; k <= 100; ++k) {
-    const int64_t t = (k - 1) * 100 * kUs;
-    for (int64_t tick = t; tick < t + 100 * kUs; tick += 25 * kUs) {
-      auto state = tick == t + 25 * kUs ? Send(*core, Command("standby", 0, {0.1, 0.1, 0.1}, k), tick, 0)
-                                        : core->Tick(tick, 0);
-      if (core->obeyed() == "standby") {
-        *switch_state = state;
-        return tick;
-      }
-    }
-  }
-  return -1;
-}
-
-TEST_F(DriverCoreTest, AFailoverIsPublishedAsAStateNamingTheNewController) {
-  const int64_t last_primary = TwoControllersAnswer(&core_, 1, 50);
-  ASSERT_EQ(core_.obeyed(), "primary");
-  std::optional<DriverState> state;
-  const int64_t switched_at = FailoverTime(&core_, &state);
-  // Silence timeout max(1.5 ms, 8 × 0.1 ms) = 1.5 ms while the standby answered newer
-  // samples; seen by the next Tick or standby command.
-  ASSERT_GT(switched_at, 0);
-  EXPECT_GT(switched_at - last_primary, 1500 * kUs);
-  EXPECT_LE(switched_at - last_primary, 1550 * kUs);
-  ASSERT_TRUE(state.has_value());
-  EXPECT_EQ(core_.obeyed(), "standby");
-  EXPECT_NE(state->reason.find("primary silent for 1.5"), std::string::npos)
-      << state->reason;
-  EXPECT_NE(state->reason.find("samples behind"), std::string::npos) << state->reason;
-}
-
-
-
-TEST_F(DriverCoreTest, AStallOfEveryoneHoldsThenGivesControlBackToTheSameController) {
-  // No samples for 5 ms (a stalled polarimeter, or the whole machine): nobody answers, so the
-  // silence is nobody's failure. On resumption the standby's command happens to come first.
-  const int64_t t = TwoControllersAnswer(&core_, 1, 50);
-  const uint64_t switches = core_.State(0).controller_switches;
-  auto state = core_.Tick(t + 3 * kMs, 0);
-  ASSERT_TRUE(state.has_value());
-  EXPECT_EQ(state->mode, DriverMode::kHolding);
-  EXPECT_NE(state->reason.find("primary silent"), std::string::npos) << state->reason;
-  state = Send(core_, Command("standby", 0, {0.7, 0.7, 0.7}, 51), t + 5 * kMs, 0);
-  ASSERT_TRUE(state.has_value());  // answered (a lockstep bench waits for it), nothing applied
-  EXPECT_EQ(state->mode, DriverMode::kHolding);
-  EXPECT_EQ(state->answers_sample, 51u);
-  EXPECT_EQ(Phi(*state), std::vector<double>({0.1, 0.1, 0.1}));
-  state = Send(core_, Command("primary", 10, {0.2, 0.2, 0.2}, 51), t + 5 * kMs + 10 * kUs, 0);
-  ASSERT_TRUE(state.has_value());
-  EXPECT_EQ(core_.obeyed(), "primary");
-  EXPECT_EQ(Phi(*state), std::vector<double>({0.2, 0.2, 0.2}));
-  // One switch: holding → primary again; the standby was never obeyed.
-  EXPECT_EQ(state->controller_switches, switches + 1);
-}
-
-TEST_F(DriverCoreTest, ARestartedBenchNumbersItsSamplesFromOneAndNobodyIsBehind) {
-  TwoControllersAnswer(&core_, 1, 50);
-  // A new polarimeter run: samples 1, 2, 3 … again, the standby's answer first each time.
-  for (int k = 1; k <= 30; ++k) {
-    const int64_t t = 5 * kMs + k * 100 * kUs;
-    EXPECT_EQ(core_.OnSample(k, 0, 0), k == 1) << "sample 1 again is a new bench run";
-    EXPECT_FALSE(Send(core_, Command("standby", 0, {0.1, 0.1, 0.1}, k), t, 0).has_value());
-    EXPECT_TRUE(Send(core_, Command("primary", 10, {0.1, 0.1, 0.1}, k), t + 10 * kUs, 0).has_value());
-    EXPECT_FALSE(core_.Tick(t + 50 * kUs, 0).has_value());
-    ASSERT_EQ(core_.obeyed(), "primary") << "sample " << k;
-  }
-}
-
-TEST_F(DriverCoreTest, HoldsAndSaysWhyWhenNoControllerIsLeftThenResumes) {
-  ASSERT_TRUE(Send(core_, Command("only", 0, {0.3, 0.2, 0.1}, 1), 0, 0));
-  EXPECT_FALSE(core_.Tick(1 * kMs, 0).has_value());
-  auto state = core_.Tick(3 * kMs, 0);
-  ASSERT_TRUE(state.has_value());
-  EXPECT_EQ(state->mode, DriverMode::kHolding);
-  EXPECT_NE(state->reason.find("only silent"), std::string::npos) << state->reason;
-  EXPECT_EQ(Phi(*state), std::vector<double>({0.3, 0.2, 0.1}));
-  // Heartbeats while holding, every 5 ms.
-  EXPECT_TRUE(core_.Tick(9 * kMs, 0).has_value());
-  EXPECT_FALSE(core_.Tick(10 * kMs, 0).has_value());
-  // Another controller starts at 10 kHz. The driver keeps holding, answering its samples,
-  // while "only" might still resume (after a stall, whoever's queued command comes first);
-  // once "next" has answered samples "only" did not for the grace (a quarter of the 1.5-ms
-  // timeout), "next" is obeyed.
-  int64_t obeyed_at = -1;
-  for (int k = 2; k <= 50 && obeyed_at < 0; ++k) {
-    const int64_t t = 20 * kMs + (k - 2) * 100 * kUs;
-    state = Send(core_, Command("next", 0, {0.31, 0.2, 0.1}, k), t, 0);
-    ASSERT_TRUE(state.has_value());
-    EXPECT_EQ(state->answers_sample, static_cast<uint64_t>(k));
-    if (state->mode == DriverMode::kActive) {
-      obeyed_at = t;
-      EXPECT_EQ(state->obeyed_controller_id, "next");
-      EXPECT_EQ(Phi(*state), std::vector<double>({0.31, 0.2, 0.1}));
-    } else {
-      EXPECT_EQ(Phi(*state), std::vector<double>({0.3, 0.2, 0.1}));
-    }
-  }
-  EXPECT_GT(obeyed_at - 20 * kMs, 375 * kUs);
-  EXPECT_LE(obeyed_at - 20 * kMs, 400 * kUs);
 }
 
 TEST(DriverCoreLimits, ClampsToTheStageRangeAndReportsSaturation) {
