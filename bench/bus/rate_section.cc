@@ -39,7 +39,7 @@ struct RawRateResult {
 RawRateResult RawRate(const BusBenchmarkHarness& harness, double rate_hz, double seconds, bool chain) {
   const auto echoes = StartEchoes(harness, harness.domain, chain, "_rate");
   bus::BusParticipant participant({harness.domain, "dpc-bench-rate"});
-  auto writer = participant.MakeWriter<msg::StokesSample>();
+  auto writer = participant.MakeWriter<msg::StokesSample>("");
   std::atomic<uint64_t> answers{0};
   auto reader = participant.MakeReader<msg::WaveplateState>("", [&](const msg::WaveplateState&, const auto&) {
     answers.fetch_add(1, std::memory_order_relaxed);

@@ -31,7 +31,7 @@ void WaitForStopSignal() {
 template <typename In, typename Out, typename Fill>
 int RunEcho(int domain, const char* name, Out reply, Fill fill) {
   bus::BusParticipant participant({domain, name});
-  auto writer = participant.MakeWriter<Out>();
+  auto writer = participant.MakeWriter<Out>("");
   auto reader = participant.MakeReader<In>("", [&](const In& in, const auto&) {
     fill(in, &reply);
     writer->Write(reply);
@@ -95,7 +95,7 @@ std::vector<std::unique_ptr<Process>> StartEchoes(const BusBenchmarkHarness& har
 RawReference::RawReference(const BusBenchmarkHarness& harness, int domain, bool chain)
     : chain_(chain), participant_({domain, chain ? "dpc-bench-chain" : "dpc-bench-ping"}) {
   children_ = StartEchoes(harness, domain, chain, "");
-  writer_ = participant_.MakeWriter<msg::StokesSample>();
+  writer_ = participant_.MakeWriter<msg::StokesSample>("");
   reader_ = participant_.MakeReader<msg::WaveplateState>("", [this](const msg::WaveplateState& s, const auto&) {
     const int64_t now_ns = WallClockNs();
     std::lock_guard<std::mutex> lock(mutex_);

@@ -8,6 +8,15 @@
 
 namespace dpc::services {
 
+std::string IdentifierProblem(const std::string& id) {
+  if (id.empty() || id.size() > 63) return "must have 1 to 63 characters";
+  for (char c : id) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+    if (!ok) return fmt::format("'{}' is not allowed (only A-Z a-z 0-9 _ -)", c);
+  }
+  return {};
+}
+
 void AddCommonOptions(CLI::App& app, CommonOptions* options) {
   app.add_option("SCENARIO", options->scenario_file,
                  "Scenario file (text format, common/proto/dpc/scenario.proto); default: the "
@@ -18,11 +27,17 @@ void AddCommonOptions(CLI::App& app, CommonOptions* options) {
       ->capture_default_str();
   app.add_option("--bench-id", options->bench_id,
                  "Bench id: the key of every topic, so that benches can share a domain")
-      ->check([](const std::string& id) -> std::string {
-        if (id.empty() || id.size() > 63) return "bench id must have 1 to 63 characters";
-        return {};
-      })
+      ->check([](const std::string& id) { return IdentifierProblem(id); })
       ->capture_default_str();
+  app.add_option("--security-dir", options->security_dir,
+                 "DDS Security: the bench's credentials (deploy/security/make-bench-pki.sh); the "
+                 "participant authenticates, is access-controlled and encrypts. Empty: security off")
+      ->envname("DPC_SECURITY_DIR")
+      ->check(CLI::ExistingDirectory);
+  app.add_option("--identity", options->identity,
+                 "DDS Security: the identity in --security-dir (default: the service's role: "
+                 "driver, polarimeter, controller-<id>)")
+      ->envname("DPC_IDENTITY");
   app.add_option("--log-level", options->log_level, "trace|debug|info|warn|error|off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}))
       ->capture_default_str();

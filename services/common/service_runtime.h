@@ -22,10 +22,17 @@ struct CommonOptions {
   std::string scenario_file;   ///< empty: the embedded default (deploy/scenarios/bench_default.pbtxt)
   std::string log_level = "info";
   cli::ScenarioOverrides overrides;   ///< the `dpc sim` flags (--method, --step, --rate-rad-per-s, …)
+  std::string security_dir;    ///< DDS Security credentials (make-bench-pki.sh); empty: off
+  std::string identity;        ///< the identity in it; empty: the service's own role
 };
 
-/// Adds --domain, --bench-id, the positional SCENARIO, --log-level and the scenario override
-/// flags of `dpc sim`.
+/// "" if `id` may name a bench or a controller (1–63 of A–Z a–z 0–9 _ -: it becomes part of a
+/// DDS partition and a certificate's name, so no wildcards or dots); else why not.
+std::string IdentifierProblem(const std::string& id);
+
+/// Adds --domain, --bench-id, the positional SCENARIO, --log-level, --security-dir and
+/// --identity (also from $DPC_SECURITY_DIR, $DPC_IDENTITY) and the scenario override flags of
+/// `dpc sim`.
 void AddCommonOptions(CLI::App& app, CommonOptions* options);
 
 /// The text of deploy/scenarios/bench_default.pbtxt, compiled in.

@@ -37,9 +37,7 @@ class ControllerService final : public Service {
   static void AddOptions(CLI::App& app, Options* o) {
     ControllerSettings& s = o->settings;
     app.add_option("--id", s.controller_id, "Controller id (unique on the bench)")
-        ->check([](const std::string& id) -> std::string {
-          return id.empty() || id.size() > 63 ? "controller id must have 1 to 63 characters" : "";
-        })
+        ->check([](const std::string& id) { return IdentifierProblem(id); })
         ->capture_default_str();
     app.add_option("--priority", s.priority, "The driver obeys the alive controller of highest priority")
         ->capture_default_str();
@@ -62,9 +60,11 @@ class ControllerService final : public Service {
       : bench_id_(common.bench_id),
         status_period_(std::chrono::milliseconds(static_cast<int64_t>(options.status_period_s * 1000))),
         core_(Settings(common, options)),
-        participant_({common.domain_id, "dpc-controller/" + options.settings.controller_id}),
-        command_writer_(participant_.MakeWriter<msg::WaveplateCommand>()),
-        status_writer_(participant_.MakeWriter<msg::ControllerStatus>()) {
+        participant_({common.domain_id, "dpc-controller/" + options.settings.controller_id,
+                      {common.security_dir,
+                       common.identity.empty() ? "controller-" + options.settings.controller_id : common.identity}}),
+        command_writer_(participant_.MakeWriter<msg::WaveplateCommand>(bench_id_, options.settings.controller_id)),
+        status_writer_(participant_.MakeWriter<msg::ControllerStatus>(bench_id_)) {
     devices_ = participant_.MakeReader<msg::DeviceDescription>(
         bench_id_, [this](const msg::DeviceDescription& message, const auto&) { OnDevice(message); });
     targets_ = participant_.MakeReader<msg::Target>(

@@ -23,6 +23,8 @@
 namespace dpc::services {
 namespace {
 
+namespace fdds = eprosima::fastdds::dds;
+
 /// The scenario (validated whole, as `dpc sim` does) and the backend's initial φ.
 ScenarioConfig LoadDriverScenario(const CommonOptions& common) {
   ScenarioConfig scenario = LoadServiceScenario(common);
@@ -69,11 +71,12 @@ class DriverService final : public Service {
         backend_(InitialPhi(scenario_)),
         core_(scenario_.stages, options.settings, &backend_),
         targets_(scenario_.target),
-        participant_({common.domain_id, "dpc-driver/" + common.bench_id}),
-        state_writer_(participant_.MakeWriter<msg::WaveplateState>()),
-        device_writer_(participant_.MakeWriter<msg::DeviceDescription>()),
-        target_writer_(participant_.MakeWriter<msg::Target>()),
-        reply_writer_(participant_.MakeWriter<msg::TargetReply>()) {
+        participant_({common.domain_id, "dpc-driver/" + common.bench_id,
+                      {common.security_dir, common.identity.empty() ? "driver" : common.identity}}),
+        state_writer_(participant_.MakeWriter<msg::WaveplateState>(bench_id_)),
+        device_writer_(participant_.MakeWriter<msg::DeviceDescription>(bench_id_)),
+        target_writer_(participant_.MakeWriter<msg::Target>(bench_id_)),
+        reply_writer_(participant_.MakeWriter<msg::TargetReply>(bench_id_)) {
     device_writer_->Write(bus::DeviceMessage(
         DeviceDescription{options.settings.driver_id, scenario_.stages, core_.max_slew_per_s(),
                           options.settings.max_ramp_s},
@@ -87,7 +90,9 @@ class DriverService final : public Service {
     samples_ = participant_.MakeReader<msg::StokesSample>(
         bench_id_, [this](const msg::StokesSample& message, const auto&) { OnSample(message); });
     commands_ = participant_.MakeReader<msg::WaveplateCommand>(
-        bench_id_, [this](const msg::WaveplateCommand& message, const auto&) { OnCommand(message); });
+        bench_id_, [this](const msg::WaveplateCommand& message, const fdds::SampleInfo& info) {
+          OnCommand(message, participant_.WriterPartition(info.sample_identity.writer_guid()));
+        });
     requests_ = participant_.MakeReader<msg::TargetRequest>(
         bench_id_, [this](const msg::TargetRequest& message, const auto&) { OnTargetRequest(message); });
     spdlog::info("{} controls, profiles {}, domain {}", core_.control_count(), participant_.profiles_file(),
@@ -151,10 +156,21 @@ class DriverService final : public Service {
     }
   }
 
-  void OnCommand(const msg::WaveplateCommand& message) {
+  /// `partition`: its writer's. The controller id must be the one the partition names: with
+  /// DDS Security, only that controller's identity may write there (its permissions).
+  void OnCommand(const msg::WaveplateCommand& message, const std::string& partition) {
     const int64_t wall_ns = WallClockNs();
     std::lock_guard<std::mutex> lock(mutex_);
-    const std::string malformed = bus::ReadCommand(message, core_.control_count(), &command_);
+    std::string malformed = bus::ReadCommand(message, core_.control_count(), &command_);
+    const std::string writer_id = bus::ControllerOfPartition(bench_id_, partition);
+    if (writer_id != command_.controller_id) {
+      // Counted against its real writer (never the controller it names).
+      if (malformed.empty()) {
+        malformed = fmt::format("controller id \"{}\" is not its writer's (partition \"{}\")",
+                                command_.controller_id, partition);
+      }
+      command_.controller_id = writer_id.empty() ? "(unknown writer)" : writer_id;
+    }
     auto state = malformed.empty()
                      ? core_.OnCommand(command_, MonotonicNs(), wall_ns)
                      : core_.OnMalformedCommand(command_.controller_id, command_.answers_sample, malformed, wall_ns);

@@ -17,7 +17,7 @@ DdsBenchLink::DdsBenchLink(bus::BusParticipant* participant, int control_count, 
       lockstep_timeout_s_(lockstep_timeout_s),
       latest_(WaveplateMotion::Still(ControlVector::Zero(control_count))),
       latency_(WallClockNs() + static_cast<int64_t>(latency_warmup_s * 1e9)) {
-  writer_ = participant->MakeWriter<msg::StokesSample>();
+  writer_ = participant->MakeWriter<msg::StokesSample>(bench_id);
   states_ = participant->MakeReader<msg::WaveplateState>(
       bench_id, [this](const msg::WaveplateState& state, const auto&) { OnState(state); });
   targets_ = participant->MakeReader<msg::Target>(

@@ -174,6 +174,9 @@ static void usage(FILE *out) {
           "with --request publishes a point TargetRequest. Network: CYCLONEDDS_URI.\n");
 }
 
+/* The bench's DDS partition, "dpc.<bench id>" (common/dpc/bus/topics.h). */
+static char partition[128];
+
 static dds_entity_t make_reader(dds_entity_t participant, const dds_topic_descriptor_t *descriptor,
                                 const char *name, bool transient_local, int32_t depth,
                                 bool reliable) {
@@ -188,6 +191,7 @@ static dds_entity_t make_reader(dds_entity_t participant, const dds_topic_descri
                        DDS_SECS(1));
   dds_qset_durability(qos, transient_local ? DDS_DURABILITY_TRANSIENT_LOCAL : DDS_DURABILITY_VOLATILE);
   dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, depth);
+  dds_qset_partition1(qos, partition);
   const dds_entity_t reader = dds_create_reader(participant, topic, qos, NULL);
   dds_delete_qos(qos);
   if (reader < 0) {
@@ -264,6 +268,7 @@ int main(int argc, char **argv) {
     }
   }
 
+  snprintf(partition, sizeof partition, "dpc.%s", bench_id);
   const dds_entity_t participant = dds_create_participant((dds_domainid_t)domain, NULL, NULL);
   if (participant < 0) {
     fprintf(stderr, "dds_create_participant(domain %ld): %s (check CYCLONEDDS_URI)\n", domain,
@@ -290,6 +295,7 @@ int main(int argc, char **argv) {
     dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
     dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
     dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 8);
+    dds_qset_partition1(qos, partition);
     request_writer = dds_create_writer(participant, topic, qos, NULL);
     dds_delete_qos(qos);
     if (request_writer < 0) {

@@ -32,8 +32,8 @@ TEST_F(BenchInputTest, MalformedCommandsAndSamplesAreCountedAndNeverApplied) {
   StartController("A", 0);
   StartPolarimeter({"--rate-hz", "1000"});
   ASSERT_TRUE(Eventually([&] { return AppliedBy("A") > 200; }, 20s)) << Logs();
-  auto commands = participant_->MakeWriter<msg::WaveplateCommand>();
-  auto samples = participant_->MakeWriter<msg::StokesSample>();
+  auto commands = participant_->MakeWriter<msg::WaveplateCommand>("bench1", "intruder");
+  auto samples = participant_->MakeWriter<msg::StokesSample>("bench1");
   ASSERT_TRUE(Eventually([&] { return commands->matched_readers() > 0 && samples->matched_readers() > 0; }, 10s));
   auto bad_command = [](std::vector<double> phi) {
     msg::WaveplateCommand c;
@@ -84,6 +84,38 @@ TEST_F(BenchInputTest, MalformedCommandsAndSamplesAreCountedAndNeverApplied) {
   // The loop kept running on the good samples.
   const size_t applied = AppliedBy("A");
   EXPECT_TRUE(Eventually([&] { return AppliedBy("A") > applied + 100; }, 5s));
+}
+
+TEST_F(BenchInputTest, ACommandInTheNameOfAnotherControllerIsRefusedAndNeverApplied) {
+  StartObserver(47);
+  StartDriver();
+  StartController("A", 0);
+  StartPolarimeter({"--rate-hz", "1000"});
+  ASSERT_TRUE(Eventually([&] { return AppliedBy("A") > 200; }, 20s)) << Logs();
+  // A participant writing in its own partition ("intruder") commands under A's id, and a
+  // priority that would win: the driver refuses it (the id is not its writer's).
+  auto commands = participant_->MakeWriter<msg::WaveplateCommand>("bench1", "intruder");
+  ASSERT_TRUE(Eventually([&] { return commands->matched_readers() > 0; }, 10s));
+  const uint64_t rejected_before = LatestState()->commands_rejected();
+  msg::WaveplateCommand spoof;
+  spoof.bench_id("bench1");
+  spoof.controller_id("A");
+  spoof.priority(1000);
+  spoof.phi({0.9, 0.9, 0.9});
+  ASSERT_TRUE(Eventually(
+      [&] {
+        spoof.answers_sample(LatestState()->answers_sample());
+        commands->Write(spoof);
+        return LatestState()->commands_rejected() > rejected_before;
+      },
+      10s))
+      << Logs();
+  EXPECT_NE(LatestState()->last_rejection().to_string().find("is not its writer's"), std::string::npos)
+      << LatestState()->last_rejection().to_string();
+  for (const auto& s : States()) {
+    for (double v : s.state.phi_applied()) EXPECT_NE(v, 0.9);
+  }
+  EXPECT_TRUE(SoonObeys("A"));
 }
 
 }  // namespace

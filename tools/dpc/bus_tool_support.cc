@@ -18,6 +18,17 @@ void AddBusToolOptions(CLI::App& command, BusToolOptions* options, const char* b
   if (bench_help != nullptr) {
     command.add_option("--bench-id", options->bench_id, bench_help)->capture_default_str();
   }
+  command.add_option("--security-dir", options->security_dir,
+                     "DDS Security: the bench's credentials (deploy/security/make-bench-pki.sh). Empty: off")
+      ->envname("DPC_SECURITY_DIR")
+      ->check(CLI::ExistingDirectory);
+  command.add_option("--identity", options->identity,
+                     "DDS Security: the identity in --security-dir (default: observer; operator for dpc target)")
+      ->envname("DPC_IDENTITY");
+}
+
+bus::BusOptions BusToolOptions::Participant(const std::string& name, const std::string& default_identity) const {
+  return bus::BusOptions{domain_id, name, {security_dir, identity.empty() ? default_identity : identity}};
 }
 
 std::string BenchFilter(const std::string& bench_id) {

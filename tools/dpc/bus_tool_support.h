@@ -11,14 +11,23 @@
 #include <functional>
 #include <string>
 
+#include "dpc/bus/bus_participant.h"
+
 namespace dpc::tools {
 
 struct BusToolOptions {
   int domain_id = 0;
   std::string bench_id = "bench1";
+  std::string security_dir;  ///< DDS Security credentials; empty: off
+  std::string identity;      ///< empty: the command's role (observer; operator for `dpc target`)
+
+  /// The participant's options: this domain, `name`, the credentials of `identity` (or of
+  /// `default_identity`).
+  bus::BusOptions Participant(const std::string& name, const std::string& default_identity) const;
 };
 
-/// Adds --domain (0…232) and, if `bench_help` is not null, --bench-id with that help text.
+/// Adds --domain (0…232), --security-dir and --identity (also $DPC_SECURITY_DIR, $DPC_IDENTITY)
+/// and, if `bench_help` is not null, --bench-id with that help text.
 void AddBusToolOptions(CLI::App& command, BusToolOptions* options, const char* bench_help);
 
 /// The bench filter for bus::BusParticipant::MakeReader: "" (all benches) for "" or "*".

@@ -132,7 +132,7 @@ cli::ExitCode RunMonitorCommand(const MonitorOptions& o) {
   try {
     std::mutex mutex;
     MonitorState state;
-    bus::BusParticipant participant({o.bus.domain_id, "dpc monitor"});
+    bus::BusParticipant participant(o.bus.Participant("dpc monitor", "observer"));
     const std::string& bench = o.bus.bench_id;
     auto targets = participant.MakeReader<msg::Target>(bench, [&](const msg::Target& m, const fdds::SampleInfo&) {
       std::lock_guard<std::mutex> lock(mutex);

@@ -119,7 +119,7 @@ cli::ExitCode RunTargetCommand(const TargetOptions& o) {
     std::mutex mutex;
     std::optional<msg::TargetReply> reply;
     std::optional<msg::Target> applied;  // a dpc_target sample naming our request
-    bus::BusParticipant participant({o.bus.domain_id, "dpc target"});
+    bus::BusParticipant participant(o.bus.Participant("dpc target", "operator"));
     // Readers before the request: the reply is VOLATILE, a reader created later misses it.
     auto replies = participant.MakeReader<msg::TargetReply>(
         o.bus.bench_id, [&](const msg::TargetReply& r, const fdds::SampleInfo&) {
@@ -133,7 +133,7 @@ cli::ExitCode RunTargetCommand(const TargetOptions& o) {
           std::lock_guard<std::mutex> lock(mutex);
           if (!applied) applied = t;
         });
-    auto writer = participant.MakeWriter<msg::TargetRequest>();
+    auto writer = participant.MakeWriter<msg::TargetRequest>(o.bus.bench_id);
 
     const auto start = std::chrono::steady_clock::now();
     const bool matched = WaitFor(

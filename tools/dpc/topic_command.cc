@@ -110,7 +110,7 @@ cli::ExitCode RunEchoOf(const TopicEchoOptions& o, const BusTopic& topic) {
   std::condition_variable arrived;
   std::deque<std::string> lines;
   int64_t accepted = 0;
-  bus::BusParticipant participant({o.bus.domain_id, "dpc topic echo"});
+  bus::BusParticipant participant(o.bus.Participant("dpc topic echo", "observer"));
   auto reader = participant.MakeReader<Message>(
       BenchFilter(o.bus.bench_id), [&](const Message& message, const fdds::SampleInfo&) {
         std::string line = o.json ? ToJson(message).dump(-1, ' ', false,
@@ -173,7 +173,7 @@ cli::ExitCode RunHzOf(const TopicHzOptions& o, const BusTopic& topic) {
   std::mutex mutex;
   std::vector<Clock::time_point> arrivals;
   arrivals.reserve(1 << 16);
-  bus::BusParticipant participant({o.bus.domain_id, "dpc topic hz"});
+  bus::BusParticipant participant(o.bus.Participant("dpc topic hz", "observer"));
   auto reader = participant.MakeReader<Message>(
       BenchFilter(o.bus.bench_id), [&](const Message&, const fdds::SampleInfo&) {
         const auto now = Clock::now();

@@ -2,8 +2,11 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <string_view>
+#include <utility>
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fmt/format.h>
 
 namespace dpc::bus {
@@ -17,7 +20,99 @@ std::string ExecutableDirectory() {
   return error ? std::string() : path.parent_path().string();
 }
 
+std::string FileUri(const std::filesystem::path& path) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) {
+    throw BusError(fmt::format("security: {} is missing (make it with deploy/security/make-bench-pki.sh)",
+                               path.string()));
+  }
+  return "file://" + std::filesystem::absolute(path).lexically_normal().string();
+}
+
+std::string FirstName(const fdds::PartitionQosPolicy& partition) {
+  const auto names = partition.names();
+  return names.empty() ? std::string("(default)") : names.front();
+}
+
+constexpr std::string_view kBenchPrefix = "dpc.";
+constexpr std::string_view kControllerInfix = ".controller.";
+
 }  // namespace
+
+std::string BenchPartition(const std::string& bench_id) {
+  return std::string(kBenchPrefix) + (bench_id.empty() ? "*" : bench_id);
+}
+
+std::string ControllerPartition(const std::string& bench_id, const std::string& controller_id) {
+  return BenchPartition(bench_id) + std::string(kControllerInfix) + (controller_id.empty() ? "*" : controller_id);
+}
+
+std::string ControllerOfPartition(const std::string& bench_id, const std::string& partition) {
+  const std::string prefix = BenchPartition(bench_id) + std::string(kControllerInfix);
+  if (bench_id.empty() || partition.size() <= prefix.size() || partition.compare(0, prefix.size(), prefix) != 0) {
+    return {};
+  }
+  std::string id = partition.substr(prefix.size());
+  if (id.find_first_of("*?[]") != std::string::npos) return {};
+  return id;
+}
+
+std::vector<std::pair<std::string, std::string>> SecurityProperties(const SecurityOptions& security) {
+  if (!security.enabled()) return {};
+  if (security.identity.empty() || security.identity.find('/') != std::string::npos ||
+      security.identity.front() == '.') {
+    throw BusError(fmt::format("security: bad identity \"{}\" (driver, polarimeter, controller-<id>, "
+                               "operator or observer)", security.identity));
+  }
+  const std::filesystem::path dir(security.directory);
+  const std::string ca = FileUri(dir / "ca" / "ca.cert.pem");
+  const std::filesystem::path mine = dir / security.identity;
+  if (!std::filesystem::is_directory(mine)) {
+    throw BusError(fmt::format("security: no identity \"{}\" in {}", security.identity, security.directory));
+  }
+  const std::string auth = "dds.sec.auth.builtin.PKI-DH.";
+  const std::string access = "dds.sec.access.builtin.Access-Permissions.";
+  return {
+      {"dds.sec.auth.plugin", "builtin.PKI-DH"},
+      {auth + "identity_ca", ca},
+      {auth + "identity_certificate", FileUri(mine / "cert.pem")},
+      {auth + "private_key", FileUri(mine / "key.pem")},
+      {"dds.sec.access.plugin", "builtin.Access-Permissions"},
+      {access + "permissions_ca", ca},
+      {access + "governance", FileUri(dir / "governance.p7s")},
+      {access + "permissions", FileUri(mine / "permissions.p7s")},
+      {"dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC"},
+  };
+}
+
+/// Keeps the partition of every remote writer discovered (for the driver's identity binding:
+/// a command's controller id must be its writer's partition's). Bounded: a participant that
+/// announces writers beyond kMaxWriters gets none remembered (its commands are refused).
+class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener {
+ public:
+  static constexpr size_t kMaxWriters = 4096;
+  void on_publisher_discovery(fdds::DomainParticipant*, eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override {
+    using Status = eprosima::fastrtps::rtps::WriterDiscoveryInfo::DISCOVERY_STATUS;
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (info.status == Status::REMOVED_WRITER) {
+      partitions_.erase(info.info.guid());
+      return;
+    }
+    const auto names = info.info.m_qos.m_partition.names();
+    if (partitions_.size() >= kMaxWriters && partitions_.count(info.info.guid()) == 0) return;
+    // A writer in several partitions names none (an honest writer of the bench is in one).
+    partitions_[info.info.guid()] = names.size() == 1 ? names.front() : std::string();
+  }
+  std::string PartitionOf(const eprosima::fastrtps::rtps::GUID_t& writer) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto found = partitions_.find(writer);
+    return found == partitions_.end() ? std::string() : found->second;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::map<eprosima::fastrtps::rtps::GUID_t, std::string> partitions_;
+};
 
 std::string ResolveProfilesFile() {
   if (const char* file = std::getenv(kProfilesEnvironmentVariable); file != nullptr && *file) {
@@ -59,16 +154,50 @@ BusParticipant::BusParticipant(const BusOptions& options) : profiles_file_(Resol
     throw BusError(fmt::format("{}: no participant profile \"{}\"", profiles_file_, kParticipantProfile));
   }
   qos.name(options.participant_name);
-  participant_ = factory->create_participant(options.domain_id, qos);
+  for (const auto& [name, value] : SecurityProperties(options.security)) {
+    qos.properties().properties().emplace_back(name, value);
+  }
+  secure_ = options.security.enabled();
+  discovery_ = std::make_unique<DiscoveryListener>();
+  participant_ = factory->create_participant(options.domain_id, qos, discovery_.get(), fdds::StatusMask::none());
   if (participant_ == nullptr) {
-    throw BusError(fmt::format("Fast DDS could not create a participant on domain {} with {}",
-                               options.domain_id, profiles_file_));
+    throw BusError(secure_ ? fmt::format("Fast DDS could not create a secure participant on domain {} as \"{}\" "
+                                         "with {}: are the certificate, key, governance and permissions of "
+                                         "one bench CA, signed, and in date?",
+                                         options.domain_id, options.security.identity, options.security.directory)
+                           : fmt::format("Fast DDS could not create a participant on domain {} with {}",
+                                         options.domain_id, profiles_file_));
   }
-  publisher_ = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
-  subscriber_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
-  if (publisher_ == nullptr || subscriber_ == nullptr) {
-    throw BusError("Fast DDS could not create a publisher or subscriber");
+}
+
+std::string BusParticipant::WriterPartition(const eprosima::fastrtps::rtps::GUID_t& writer) const {
+  return discovery_->PartitionOf(writer);
+}
+
+fdds::Publisher* BusParticipant::PublisherFor(const std::string& partition) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto found = publishers_.find(partition);
+  if (found != publishers_.end()) return found->second;
+  fdds::PublisherQos qos = fdds::PUBLISHER_QOS_DEFAULT;
+  qos.partition().push_back(partition.c_str());
+  fdds::Publisher* publisher = participant_->create_publisher(qos);
+  if (publisher == nullptr) throw BusError(fmt::format("Fast DDS could not create a publisher in partition {}", partition));
+  publishers_.emplace(partition, publisher);
+  return publisher;
+}
+
+fdds::Subscriber* BusParticipant::SubscriberFor(const std::string& partition) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto found = subscribers_.find(partition);
+  if (found != subscribers_.end()) return found->second;
+  fdds::SubscriberQos qos = fdds::SUBSCRIBER_QOS_DEFAULT;
+  qos.partition().push_back(partition.c_str());
+  fdds::Subscriber* subscriber = participant_->create_subscriber(qos);
+  if (subscriber == nullptr) {
+    throw BusError(fmt::format("Fast DDS could not create a subscriber in partition {}", partition));
   }
+  subscribers_.emplace(partition, subscriber);
+  return subscriber;
 }
 
 BusParticipant::~BusParticipant() {
@@ -93,29 +222,32 @@ fdds::Topic* BusParticipant::TopicFor(const std::string& name, fdds::TypeSupport
   return topic;
 }
 
-fdds::DataWriter* BusParticipant::CreateWriter(fdds::Topic* topic, const std::string& profile) {
+fdds::DataWriter* BusParticipant::CreateWriter(fdds::Publisher* publisher, fdds::Topic* topic,
+                                               const std::string& profile) {
   fdds::DataWriterQos qos;
-  if (publisher_->get_datawriter_qos_from_profile(profile, qos) != ReturnCode_t::RETCODE_OK) {
+  if (publisher->get_datawriter_qos_from_profile(profile, qos) != ReturnCode_t::RETCODE_OK) {
     throw BusError(fmt::format("{}: no data_writer profile \"{}\"", profiles_file_, profile));
   }
-  fdds::DataWriter* writer = publisher_->create_datawriter(topic, qos);
+  fdds::DataWriter* writer = publisher->create_datawriter(topic, qos);
   if (writer == nullptr) {
-    throw BusError(fmt::format("could not create a writer on {} with profile {}",
-                               topic->get_name(), profile));
+    throw BusError(fmt::format("could not create a writer on {} in partition {} with profile {}{}", topic->get_name(),
+                               FirstName(publisher->get_qos().partition()),
+                               profile, secure_ ? " (does this identity's permissions allow it?)" : ""));
   }
   return writer;
 }
 
-fdds::DataReader* BusParticipant::CreateReader(fdds::Topic* topic, const std::string& profile,
-                                               fdds::DataReaderListener* listener) {
+fdds::DataReader* BusParticipant::CreateReader(fdds::Subscriber* subscriber, fdds::Topic* topic,
+                                               const std::string& profile, fdds::DataReaderListener* listener) {
   fdds::DataReaderQos qos;
-  if (subscriber_->get_datareader_qos_from_profile(profile, qos) != ReturnCode_t::RETCODE_OK) {
+  if (subscriber->get_datareader_qos_from_profile(profile, qos) != ReturnCode_t::RETCODE_OK) {
     throw BusError(fmt::format("{}: no data_reader profile \"{}\"", profiles_file_, profile));
   }
-  fdds::DataReader* reader = subscriber_->create_datareader(topic, qos, listener);
+  fdds::DataReader* reader = subscriber->create_datareader(topic, qos, listener);
   if (reader == nullptr) {
-    throw BusError(fmt::format("could not create a reader on {} with profile {}",
-                               topic->get_name(), profile));
+    throw BusError(fmt::format("could not create a reader on {} in partition {} with profile {}{}", topic->get_name(),
+                               FirstName(subscriber->get_qos().partition()),
+                               profile, secure_ ? " (does this identity's permissions allow it?)" : ""));
   }
   return reader;
 }

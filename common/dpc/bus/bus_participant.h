@@ -6,11 +6,18 @@
 // default configuration talks to the network. The participant QoS is the profile
 // "dpc.participant"; each topic's writer and reader QoS are "<topic>.writer" / "<topic>.reader"
 // (topics.h). A missing file or profile is an error that names it: nothing starts with
-// unintended QoS.
+// unintended QoS. Every writer and reader lives in its bench's partition (topics.h).
+//
+// Security (BusOptions::security, a directory made by deploy/security/make-bench-pki.sh and an
+// identity in it): the participant authenticates with PKI-DH, is checked against the signed
+// governance and its identity's signed permissions (Access-Permissions), and protects what
+// the governance says with AES-GCM-GMAC. Without credentials, or with an identity that may not
+// publish or read a topic in a partition, nothing is matched.
 
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -47,9 +54,22 @@ inline constexpr char kParticipantProfile[] = "dpc.participant";
 /// neither exists.
 std::string ResolveProfilesFile();
 
+/// DDS Security credentials: a bench's security directory (make-bench-pki.sh) and the identity
+/// in it this participant is (driver, polarimeter, controller-<id>, operator, observer).
+struct SecurityOptions {
+  std::string directory;  ///< empty: security off
+  std::string identity;
+  bool enabled() const { return !directory.empty(); }
+};
+
+/// The Fast DDS participant properties that turn on the builtin security plugins with these
+/// credentials (file:// URIs). Throws BusError naming a missing file.
+std::vector<std::pair<std::string, std::string>> SecurityProperties(const SecurityOptions& security);
+
 struct BusOptions {
   int domain_id = 0;
   std::string participant_name = "dpc";
+  SecurityOptions security;
 };
 
 /// Counters of one reader, readable from any thread.
@@ -152,50 +172,63 @@ class BusParticipant {
   BusParticipant(const BusParticipant&) = delete;
   BusParticipant& operator=(const BusParticipant&) = delete;
 
-  /// A writer with the topic's "<topic>.writer" profile (or `profile` if given).
+  /// A writer with the topic's "<topic>.writer" profile in the partition of `bench_id` (and, for
+  /// a command, of `controller_id`: topics.h).
   template <typename Message>
-  std::unique_ptr<Writer<Message>> MakeWriter(const std::string& profile = {}) {
+  std::unique_ptr<Writer<Message>> MakeWriter(const std::string& bench_id, const std::string& controller_id = {}) {
     using Traits = TopicTraits<Message>;
     auto* topic = TopicFor(std::string(Traits::kTopic),
                            eprosima::fastdds::dds::TypeSupport(new typename Traits::PubSubType()));
-    auto* writer = CreateWriter(topic, profile.empty() ? std::string(Traits::kWriterProfile) : profile);
-    return std::make_unique<Writer<Message>>(writer, publisher_);
+    auto* publisher = PublisherFor(PartitionFor<Message>(bench_id, controller_id));
+    auto* writer = CreateWriter(publisher, topic, std::string(Traits::kWriterProfile));
+    return std::make_unique<Writer<Message>>(writer, publisher);
   }
 
-  /// A reader with the topic's "<topic>.reader" profile; `callback` runs on Fast DDS's listener
-  /// thread for each valid sample of `bench_id` (all benches if empty).
+  /// A reader with the topic's "<topic>.reader" profile in the partition of `bench_id` (every
+  /// controller's, for commands); `callback` runs on Fast DDS's listener thread for each valid
+  /// sample of `bench_id` (all benches if empty).
   template <typename Message>
   std::unique_ptr<Reader<Message>> MakeReader(const std::string& bench_id,
-                                              typename Reader<Message>::Callback callback,
-                                              const std::string& profile = {}) {
+                                              typename Reader<Message>::Callback callback) {
     using Traits = TopicTraits<Message>;
     auto* topic = TopicFor(std::string(Traits::kTopic),
                            eprosima::fastdds::dds::TypeSupport(new typename Traits::PubSubType()));
+    auto* subscriber = SubscriberFor(PartitionFor<Message>(bench_id));
     auto reader = std::make_unique<Reader<Message>>(bench_id, std::move(callback));
-    reader->Attach(CreateReader(topic, profile.empty() ? std::string(Traits::kReaderProfile) : profile,
-                                reader.get()),
-                   subscriber_);
+    reader->Attach(CreateReader(subscriber, topic, std::string(Traits::kReaderProfile), reader.get()), subscriber);
     return reader;
   }
 
+  /// The partition a remote writer (SampleInfo::sample_identity.writer_guid()) was discovered
+  /// in; "" if it is not (or no longer) known.
+  std::string WriterPartition(const eprosima::fastrtps::rtps::GUID_t& writer) const;
+
   eprosima::fastdds::dds::DomainParticipant* raw() const { return participant_; }
   const std::string& profiles_file() const { return profiles_file_; }
+  bool secure() const { return secure_; }
 
  private:
   eprosima::fastdds::dds::Topic* TopicFor(const std::string& name,
                                           eprosima::fastdds::dds::TypeSupport type);
-  eprosima::fastdds::dds::DataWriter* CreateWriter(eprosima::fastdds::dds::Topic* topic,
+  eprosima::fastdds::dds::Publisher* PublisherFor(const std::string& partition);
+  eprosima::fastdds::dds::Subscriber* SubscriberFor(const std::string& partition);
+  eprosima::fastdds::dds::DataWriter* CreateWriter(eprosima::fastdds::dds::Publisher* publisher,
+                                                   eprosima::fastdds::dds::Topic* topic,
                                                    const std::string& profile);
-  eprosima::fastdds::dds::DataReader* CreateReader(eprosima::fastdds::dds::Topic* topic,
+  eprosima::fastdds::dds::DataReader* CreateReader(eprosima::fastdds::dds::Subscriber* subscriber,
+                                                   eprosima::fastdds::dds::Topic* topic,
                                                    const std::string& profile,
                                                    eprosima::fastdds::dds::DataReaderListener* listener);
 
+  class DiscoveryListener;
   std::string profiles_file_;
+  bool secure_ = false;
+  std::unique_ptr<DiscoveryListener> discovery_;  ///< remote writers' partitions
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
-  eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
-  eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
   std::mutex mutex_;
   std::vector<eprosima::fastdds::dds::Topic*> topics_;
+  std::map<std::string, eprosima::fastdds::dds::Publisher*> publishers_;    ///< by partition
+  std::map<std::string, eprosima::fastdds::dds::Subscriber*> subscribers_;  ///< by partition
 };
 
 }  // namespace dpc::bus

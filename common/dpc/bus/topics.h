@@ -13,7 +13,15 @@
 // | dpc_target_reply       | TargetReply        | driver               | reliable, volatile                |
 //
 // Every profile is named "<topic>.writer" / "<topic>.reader"; data-sharing is off in all of them.
+//
+// Partitions: every topic of bench B lives in the DDS partition "dpc.B", except the controllers'
+// commands: controller C writes in "dpc.B.controller.C", the driver reads "dpc.B.controller.*".
+// A participant of another bench is never matched (its data never reaches this bench's
+// readers: no cost, no instance taken), and with DDS Security the permissions grant a
+// controller identity only its own partition, which binds the controller id to the identity
+// (the driver refuses a command whose id is not its writer's partition's).
 
+#include <string>
 #include <string_view>
 
 #include "dpc/msg/bench.h"
@@ -24,24 +32,37 @@ namespace dpc::bus {
 template <typename Message>
 struct TopicTraits;
 
-#define DPC_BUS_TOPIC(Message, topic_name)                                  \
+#define DPC_BUS_TOPIC(Message, topic_name, per_controller)                  \
   template <>                                                               \
   struct TopicTraits<msg::Message> {                                        \
     using PubSubType = msg::Message##PubSubType;                            \
     static constexpr std::string_view kTopic = topic_name;                  \
     static constexpr std::string_view kWriterProfile = topic_name ".writer"; \
     static constexpr std::string_view kReaderProfile = topic_name ".reader"; \
+    static constexpr bool kPerController = per_controller;                  \
   }
 
-DPC_BUS_TOPIC(StokesSample, "dpc_stokes_sample");
-DPC_BUS_TOPIC(WaveplateCommand, "dpc_waveplate_command");
-DPC_BUS_TOPIC(WaveplateState, "dpc_waveplate_state");
-DPC_BUS_TOPIC(ControllerStatus, "dpc_controller_status");
-DPC_BUS_TOPIC(DeviceDescription, "dpc_device_description");
-DPC_BUS_TOPIC(Target, "dpc_target");
-DPC_BUS_TOPIC(TargetRequest, "dpc_target_request");
-DPC_BUS_TOPIC(TargetReply, "dpc_target_reply");
+DPC_BUS_TOPIC(StokesSample, "dpc_stokes_sample", false);
+DPC_BUS_TOPIC(WaveplateCommand, "dpc_waveplate_command", true);
+DPC_BUS_TOPIC(WaveplateState, "dpc_waveplate_state", false);
+DPC_BUS_TOPIC(ControllerStatus, "dpc_controller_status", false);
+DPC_BUS_TOPIC(DeviceDescription, "dpc_device_description", false);
+DPC_BUS_TOPIC(Target, "dpc_target", false);
+DPC_BUS_TOPIC(TargetRequest, "dpc_target_request", false);
+DPC_BUS_TOPIC(TargetReply, "dpc_target_reply", false);
 
 #undef DPC_BUS_TOPIC
+
+/// "dpc.<bench>"; every bench ("dpc.*") for "".
+std::string BenchPartition(const std::string& bench_id);
+/// "dpc.<bench>.controller.<controller>"; "*" for an empty bench or controller.
+std::string ControllerPartition(const std::string& bench_id, const std::string& controller_id);
+/// The controller id a command writer's partition names ("" if it names none or a pattern).
+std::string ControllerOfPartition(const std::string& bench_id, const std::string& partition);
+/// The partition of a writer or reader of `Message` for this bench (and controller).
+template <typename Message>
+std::string PartitionFor(const std::string& bench_id, const std::string& controller_id = {}) {
+  return TopicTraits<Message>::kPerController ? ControllerPartition(bench_id, controller_id) : BenchPartition(bench_id);
+}
 
 }  // namespace dpc::bus
