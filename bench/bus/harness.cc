@@ -59,6 +59,7 @@ std::unique_ptr<Process> BusBenchmarkHarness::StartSelf(std::vector<std::string>
 Process& Services::Start(const std::string& binary, std::vector<std::string> args, const std::string& name) {
   args.insert(args.begin(), binary);
   args.insert(args.end(), {"--domain", std::to_string(harness_.domain), "--log-level", "info"});
+  args.insert(args.end(), common_args_.begin(), common_args_.end());
   processes_.push_back(std::make_unique<Process>(args, harness_.LogPath(name + log_suffix_)));
   return *processes_.back();
 }

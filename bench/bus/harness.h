@@ -62,10 +62,13 @@ class Services {
   Process& Controller(const std::string& id, int priority, std::vector<std::string> extra = {});
   Process& Polarimeter(std::vector<std::string> args);
   void StopAll() { processes_.clear(); }
+  /// Arguments every service started from now on gets (e.g. --security-dir DIR).
+  void AddCommonArgs(std::vector<std::string> args) { common_args_ = std::move(args); }
 
  private:
   const BusBenchmarkHarness& harness_;
   std::string log_suffix_;
+  std::vector<std::string> common_args_;
   std::vector<std::unique_ptr<Process>> processes_;
 };
 

@@ -21,6 +21,10 @@ void RunFailoverSection(const BusBenchmarkHarness& harness);
 /// tracking: mean error against the rotation rate, with and without prediction
 /// (tracking_section.cc).
 void RunTrackingSection(const BusBenchmarkHarness& harness);
+/// security: the same bench open and with DDS Security (PKI-DH, Access-Permissions,
+/// AES-GCM-GMAC) side by side: loop latency, CPU per sample, sustained rate
+/// (security_section.cc).
+void RunSecuritySection(const BusBenchmarkHarness& harness);
 /// memory: RSS of each service at the start and the end of a long 10 kHz run
 /// (memory_section.cc).
 void RunMemorySection(const BusBenchmarkHarness& harness);

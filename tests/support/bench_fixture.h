@@ -37,9 +37,12 @@ struct SeenState {
 
 class BenchFixture : public ::testing::Test {
  protected:
-  void StartObserver(int domain) {
+  /// The test's own participant on `domain` (with `security`: DDS Security credentials, e.g.
+  /// the observer identity of a secure bench).
+  void StartObserver(int domain, bus::SecurityOptions security = {}) {
     domain_ = domain;
-    participant_ = std::make_unique<bus::BusParticipant>(bus::BusOptions{domain, "dpc-test-observer"});
+    participant_ =
+        std::make_unique<bus::BusParticipant>(bus::BusOptions{domain, "dpc-test-observer", std::move(security)});
     states_ = participant_->MakeReader<msg::WaveplateState>(
         "bench1", [this](const msg::WaveplateState& state, const auto&) {
           std::lock_guard<std::mutex> lock(mutex_);
@@ -71,6 +74,7 @@ class BenchFixture : public ::testing::Test {
     args.insert(args.begin(), binary);
     args.push_back("--domain");
     args.push_back(std::to_string(domain_));
+    args.insert(args.end(), common_args_.begin(), common_args_.end());
     processes_.push_back(std::make_unique<Process>(args, dir_ + "/" + name + ".log"));
     return *processes_.back();
   }
@@ -138,6 +142,7 @@ class BenchFixture : public ::testing::Test {
 
   std::string dir_ = BenchTempDir();
   int domain_ = 0;
+  std::vector<std::string> common_args_;  ///< given to every service started (e.g. --security-dir)
   std::unique_ptr<bus::BusParticipant> participant_;
   std::unique_ptr<bus::Reader<msg::WaveplateState>> states_;
   std::unique_ptr<bus::Reader<msg::ControllerStatus>> statuses_;

@@ -1,0 +1,210 @@
+// The secure bench as real processes: the three services with DDS Security (a bench PKI made
+// by deploy/security/make-bench-pki.sh), watched by the observer identity, attacked by
+// participants without credentials, with a certificate of another CA, an expired certificate,
+// tampered governance or permissions, and by legitimate identities doing what their
+// permissions do not grant. Each attack gets 0 matched readers and 0 applied data, while the
+// bench keeps locking. Domain 48; loopback only.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "support/bench_fixture.h"
+
+namespace dpc {
+namespace {
+
+using dpc::testing::Eventually;
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+
+std::string g_pki;            ///< the bench's credentials
+std::string g_other_ca;       ///< another CA's bench
+std::string g_tampered_governance;
+std::string g_tampered_permissions;
+std::string g_setup_error;
+
+bool Shell(const std::string& command) { return std::system((command + " >>" + g_pki + ".log 2>&1").c_str()) == 0; }
+
+/// Copies `dir` to `copy` and replaces the first `from` in `file` (inside it) by `to`.
+bool TamperedCopy(const std::string& dir, const std::string& copy, const std::string& file, const std::string& from,
+                  const std::string& to) {
+  fs::remove_all(copy);
+  fs::copy(dir, copy, fs::copy_options::recursive);
+  const fs::path path = fs::path(copy) / file;
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string content = text.str();
+  const size_t at = content.find(from);
+  if (at == std::string::npos) return false;
+  content.replace(at, from.size(), to);
+  std::ofstream(path, std::ios::trunc) << content;
+  return true;
+}
+
+class BenchSecurityTest : public dpc::testing::BenchFixture {
+ protected:
+  static void SetUpTestSuite() {
+    const std::string base = ::testing::TempDir() + "dpc_security_" + std::to_string(getpid());
+    fs::remove_all(base);
+    fs::create_directories(base);
+    g_pki = base + "/bench";
+    g_other_ca = base + "/other";
+    g_tampered_governance = base + "/tampered_governance";
+    g_tampered_permissions = base + "/tampered_permissions";
+    const std::string script = std::string(DPC_SOURCE_DIR) + "/deploy/security/make-bench-pki.sh";
+    if (!Shell(script + " --out " + g_pki + " --controllers main,standby,late --expired controller-late") ||
+        !Shell(script + " --out " + g_other_ca + " --controllers main")) {
+      g_setup_error = "make-bench-pki.sh failed: " + g_pki + ".log";
+      return;
+    }
+    // Governance: the topic rule's expression (signed text) changed; permissions: main's grant
+    // widened to every controller's partition.
+    if (!TamperedCopy(g_pki, g_tampered_governance, "governance.p7s", "<topic_expression>dpc_*",
+                      "<topic_expression>dpc_x") ||
+        !TamperedCopy(g_pki, g_tampered_permissions, "controller-main/permissions.p7s", "dpc.bench1.controller.main",
+                      "dpc.bench1.controller.*")) {
+      g_setup_error = "could not tamper with the copies (layout of make-bench-pki.sh changed?)";
+    }
+  }
+
+  void SetUp() override {
+    ASSERT_TRUE(g_setup_error.empty()) << g_setup_error;
+    common_args_ = {"--security-dir", g_pki};
+    StartObserver(48, {g_pki, "observer"});
+    StartDriver();
+    StartController("main", 10);
+    StartPolarimeter({"--rate-hz", "1000"});
+    ASSERT_TRUE(Eventually([&] { return AppliedBy("main") > 200; }, 30s)) << Logs();
+  }
+
+  /// An attacker: a participant with `security`, writing `Message` (bench1, `controller_id`'s
+  /// partition for commands) with `fill`ed data for 1.5 s. Returns how many readers its writer
+  /// ever matched (0 if Fast DDS refused the participant or the writer: both are refusals).
+  template <typename Message>
+  int Attack(const bus::SecurityOptions& security, const std::string& controller_id,
+             const std::function<void(Message*)>& fill, std::string* how) {
+    std::unique_ptr<bus::BusParticipant> participant;
+    std::unique_ptr<bus::Writer<Message>> writer;
+    try {
+      participant = std::make_unique<bus::BusParticipant>(bus::BusOptions{48, "dpc-test-attacker", security});
+      writer = participant->MakeWriter<Message>("bench1", controller_id);
+    } catch (const bus::BusError& e) {
+      *how = std::string("refused at creation: ") + e.what();
+      return 0;
+    }
+    int matched = 0;
+    const auto end = std::chrono::steady_clock::now() + 1500ms;
+    while (std::chrono::steady_clock::now() < end) {
+      Message message;
+      fill(&message);
+      writer->Write(message);
+      matched = std::max(matched, writer->matched_readers());
+      std::this_thread::sleep_for(2ms);
+    }
+    *how = "created; matched " + std::to_string(matched) + " readers";
+    writer.reset();
+    participant.reset();
+    return matched;
+  }
+
+  /// A command of `id` with a priority that would win and φ no controller commands.
+  std::function<void(msg::WaveplateCommand*)> Spoof(const std::string& id, int priority = 1000) {
+    return [this, id, priority](msg::WaveplateCommand* c) {
+      c->bench_id("bench1");
+      c->controller_id(id);
+      c->priority(priority);
+      auto state = LatestState();
+      c->answers_sample(state ? state->answers_sample() + 1 : 1);
+      c->phi({0.9, 0.9, 0.9});
+    };
+  }
+
+  /// No state ever applied the attackers' φ, and the bench still follows main.
+  void ExpectUntouched(size_t applied_before) {
+    for (const auto& s : States()) {
+      for (double v : s.state.phi_applied()) ASSERT_NE(v, 0.9) << "an attacker's command was applied";
+    }
+    EXPECT_TRUE(SoonObeys("main")) << LatestState()->reason().to_string();
+    EXPECT_GT(AppliedBy("main"), applied_before + 500) << "the bench kept locking throughout";
+  }
+};
+
+TEST_F(BenchSecurityTest, NoOneWithoutTheBenchsCredentialsOrTheRightPermissionIsMatched) {
+  const size_t applied_before = AppliedBy("main");
+  struct Case {
+    const char* name;
+    bus::SecurityOptions security;
+    std::string id;
+  };
+  const std::vector<Case> command_attacks = {
+      {"no credentials", {}, "main"},
+      {"a certificate of another CA", {g_other_ca, "controller-main"}, "main"},
+      {"an expired certificate", {g_pki, "controller-late"}, "late"},
+      {"tampered governance", {g_tampered_governance, "controller-main"}, "main"},
+      {"tampered permissions", {g_tampered_permissions, "controller-main"}, "main"},
+      {"an observer publishing commands", {g_pki, "observer"}, "observer"},
+      {"a controller commanding in another controller's partition", {g_pki, "controller-standby"}, "main"},
+  };
+  for (const Case& attack : command_attacks) {
+    std::string how;
+    EXPECT_EQ(Attack<msg::WaveplateCommand>(attack.security, attack.id, Spoof(attack.id), &how), 0)
+        << attack.name << ": " << how;
+    std::printf("%-60s %s\n", attack.name, how.c_str());
+  }
+  // Forged authority: a target and a device description from anyone but the driver.
+  std::string how;
+  auto forged_target = [](msg::Target* t) {
+    t->bench_id("bench1");
+    t->revision(~0ULL);
+  };
+  EXPECT_EQ(Attack<msg::Target>({g_pki, "controller-standby"}, "", forged_target, &how), 0)
+      << "a controller publishing a target: " << how;
+  std::printf("%-60s %s\n", "a controller publishing a target", how.c_str());
+  EXPECT_EQ(Attack<msg::Target>({}, "", forged_target, &how), 0) << "no credentials, a target: " << how;
+  EXPECT_EQ(Attack<msg::DeviceDescription>({g_pki, "operator"}, "",
+                                           [](msg::DeviceDescription* d) { d->bench_id("bench1"); }, &how),
+            0)
+      << "an operator publishing a device description: " << how;
+  EXPECT_EQ(Attack<msg::StokesSample>({g_pki, "controller-standby"}, "",
+                                      [](msg::StokesSample* s) {
+                                        s->bench_id("bench1");
+                                        s->sequence_number(~0ULL - 1);
+                                        s->s_in({1.0, 0.0, 0.0});
+                                        s->s_out({1.0, 0.0, 0.0});
+                                      },
+                                      &how),
+            0)
+      << "a controller publishing samples: " << how;
+  EXPECT_EQ(Attack<msg::WaveplateState>({}, "", [](msg::WaveplateState* s) { s->bench_id("bench1"); }, &how), 0)
+      << "no credentials, a state: " << how;
+  ExpectUntouched(applied_before);
+  // The control: the standby's own identity, in its own partition, is matched (a low priority,
+  // so that main stays obeyed).
+  EXPECT_GT(Attack<msg::WaveplateCommand>({g_pki, "controller-standby"}, "standby", Spoof("standby", -5), &how), 0)
+      << "the legitimate standby: " << how;
+}
+
+TEST_F(BenchSecurityTest, AParticipantWithoutCredentialsSeesNothing) {
+  bus::BusParticipant eavesdropper(bus::BusOptions{48, "dpc-test-eavesdropper"});
+  auto states = eavesdropper.MakeReader<msg::WaveplateState>("bench1", [](const auto&, const auto&) {});
+  auto samples = eavesdropper.MakeReader<msg::StokesSample>("bench1", [](const auto&, const auto&) {});
+  std::this_thread::sleep_for(2s);
+  EXPECT_EQ(states->counters().matched_writers.load(), 0);
+  EXPECT_EQ(states->counters().samples.load(), 0u);
+  EXPECT_EQ(samples->counters().matched_writers.load(), 0);
+  EXPECT_EQ(samples->counters().samples.load(), 0u);
+  EXPECT_TRUE(SoonObeys("main"));
+}
+
+}  // namespace
+}  // namespace dpc
