@@ -70,7 +70,7 @@ class DriverService final : public Service {
         scenario_(LoadDriverScenario(common)),
         backend_(InitialPhi(scenario_)),
         core_(scenario_.stages, options.settings, &backend_),
-        targets_(scenario_.target),
+        targets_(scenario_.target, TargetAuthority::EpochNow()),
         participant_({common.domain_id, "dpc-driver/" + common.bench_id,
                       {common.security_dir, common.identity.empty() ? "driver" : common.identity}}),
         state_writer_(participant_.MakeWriter<msg::WaveplateState>(bench_id_)),

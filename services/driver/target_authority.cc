@@ -1,5 +1,7 @@
 #include "target_authority.h"
 
+#include <chrono>
+
 #include <fmt/format.h>
 
 #include "dpc/config/scenario_error.h"
@@ -7,9 +9,15 @@
 
 namespace dpc::services {
 
-TargetAuthority::TargetAuthority(const TargetConfig& initial) {
-  current_.revision = 1;
+TargetAuthority::TargetAuthority(const TargetConfig& initial, uint32_t epoch) {
+  current_.revision = (static_cast<uint64_t>(epoch) << 32) | 1u;
   current_.target = initial;
+}
+
+uint32_t TargetAuthority::EpochNow() {
+  return static_cast<uint32_t>(std::chrono::duration_cast<std::chrono::seconds>(
+                                   std::chrono::system_clock::now().time_since_epoch())
+                                   .count());
 }
 
 TargetAuthority::Reply TargetAuthority::Request(const std::string& request_id, const TargetConfig& target) {

@@ -1,9 +1,12 @@
 #pragma once
 // The bench's target, with the driver as its one authority: it publishes the scenario's target
-// as revision 1 and decides every request to change it (dpc target → dpc_target_request): a
-// valid target is accepted as the next revision, anything else is refused with the reason. The
-// revision grows with every accepted change, so controllers and the polarimeter keep the
-// newest.
+// as the first revision of its epoch and decides every request to change it (dpc target →
+// dpc_target_request): a valid target is accepted as the next revision, anything else is
+// refused with the reason. The revision grows with every accepted change, so controllers and
+// the polarimeter keep the newest. A revision is epoch << 32 | count, the epoch the driver's
+// start (wall-clock seconds): a restarted driver's revisions are above every one before, so its
+// targets are never mistaken for old ones (a driver restarted with revision 1 again was ignored
+// by controllers that had seen revision 2).
 
 #include <cstdint>
 #include <string>
@@ -21,8 +24,12 @@ class TargetAuthority {
     std::string message;
   };
 
-  /// `initial`: the scenario's target, validated (ValidateTargetConfig).
-  explicit TargetAuthority(const TargetConfig& initial);
+  /// `initial`: the scenario's target, validated (ValidateTargetConfig), published as revision
+  /// epoch << 32 | 1.
+  TargetAuthority(const TargetConfig& initial, uint32_t epoch);
+
+  /// The epoch of a driver starting now: the wall clock's seconds.
+  static uint32_t EpochNow();
 
   const BenchTarget& current() const { return current_; }
 
