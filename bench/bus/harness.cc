@@ -64,7 +64,9 @@ Process& Services::Start(const std::string& binary, std::vector<std::string> arg
   return *processes_.back();
 }
 
-Process& Services::Driver() { return Start(DPC_DRIVER_BINARY, {}, "driver"); }
+Process& Services::Driver() {
+  return Start(DPC_DRIVER_BINARY, {"--device-record", harness_.LogPath("driver" + log_suffix_) + ".record"}, "driver");
+}
 
 Process& Services::Controller(const std::string& id, int priority, std::vector<std::string> extra) {
   std::vector<std::string> args = {"--id", id, "--priority", std::to_string(priority)};

@@ -37,6 +37,7 @@ class DriverService final : public Service {
   struct Options {
     DriverSettings settings;
     double tick_s = 2.5e-4;
+    std::string device_record;  ///< empty: DeviceRecord::DefaultPath; "none": no record
   };
 
   static void AddOptions(CLI::App& app, Options* o) {
@@ -59,6 +60,10 @@ class DriverService final : public Service {
                    "A command's rate (phi_rate_per_s) moves the waveplates for at most this long of "
                    "bench time; the next command normally replaces it long before")
         ->check(CLI::Range(0.0, 1.0))->capture_default_str();
+    app.add_option("--device-record", o->device_record,
+                   "Where the simulated waveplates' position is kept across driver restarts (a file "
+                   "mapped in memory; default /dev/shm/dpc-waveplates-<domain>-<bench>-<id>; none: "
+                   "start from the scenario's initial φ every time)");
     app.add_option("--tick-s", o->tick_s, "Shortest interval between the driver's checks for silent controllers")
         ->check(CLI::Range(1e-5, 0.1))->capture_default_str();
   }
@@ -68,7 +73,8 @@ class DriverService final : public Service {
       : bench_id_(common.bench_id),
         tick_s_(options.tick_s),
         scenario_(LoadDriverScenario(common)),
-        backend_(InitialPhi(scenario_)),
+        record_(MakeRecord(common, options, scenario_)),
+        backend_(InitialPhi(scenario_, record_.get()), DeviceLimits{}, record_.get()),
         core_(scenario_.stages, options.settings, &backend_),
         targets_(scenario_.target, TargetAuthority::EpochNow()),
         participant_({common.domain_id, "dpc-driver/" + common.bench_id,
@@ -126,8 +132,29 @@ class DriverService final : public Service {
   }
 
  private:
-  static ControlVector InitialPhi(const ScenarioConfig& scenario) {
+  static std::unique_ptr<DeviceRecord> MakeRecord(const CommonOptions& common, const Options& options,
+                                                  const ScenarioConfig& scenario) {
+    if (options.device_record == "none") return nullptr;
+    const std::string path = options.device_record.empty()
+                                 ? DeviceRecord::DefaultPath(common.domain_id, common.bench_id, options.settings.driver_id)
+                                 : options.device_record;
+    try {
+      return std::make_unique<DeviceRecord>(path, ScenarioControlCount(scenario.stages));
+    } catch (const std::runtime_error& e) {
+      throw std::runtime_error(fmt::format("--device-record: {}", e.what()));
+    }
+  }
+
+  /// Where the device's record says the waveplates are (inside the ranges), else the
+  /// scenario's initial φ.
+  static ControlVector InitialPhi(const ScenarioConfig& scenario, const DeviceRecord* record) {
     ControlVector phi = BuildInitialPhi(scenario.controller, ScenarioControlCount(scenario.stages));
+    if (record != nullptr) {
+      if (auto last = record->LastPhi()) {
+        phi = *last;
+        spdlog::info("starting where the waveplates were left ({})", record->path());
+      }
+    }
     BuildChain(scenario.stages).ClampToRanges(&phi);
     return phi;
   }
@@ -206,6 +233,7 @@ class DriverService final : public Service {
   std::string bench_id_;
   double tick_s_;
   ScenarioConfig scenario_;
+  std::unique_ptr<DeviceRecord> record_;
   SimulatedWaveplates backend_;
   std::mutex mutex_;             ///< the core, the target authority and the messages below
   DriverCore core_;

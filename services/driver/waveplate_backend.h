@@ -9,6 +9,7 @@
 
 #include <string>
 
+#include "device_record.h"
 #include "dpc/bench/waveplate_motion.h"
 
 namespace dpc::services {
@@ -39,11 +40,17 @@ class WaveplateBackend {
 /// polarimeter service from the state the driver publishes, which carries the motion.
 class SimulatedWaveplates final : public WaveplateBackend {
  public:
-  explicit SimulatedWaveplates(const ControlVector& initial_phi, DeviceLimits limits = {})
-      : limits_(limits), motion_(WaveplateMotion::Still(initial_phi)) {}
+  /// `record`: where every motion is also written (DeviceRecord), so that a driver started
+  /// later finds the waveplates where this one left them; may be null.
+  explicit SimulatedWaveplates(const ControlVector& initial_phi, DeviceLimits limits = {},
+                               DeviceRecord* record = nullptr)
+      : limits_(limits), motion_(WaveplateMotion::Still(initial_phi)), record_(record) {
+    if (record_ != nullptr) record_->Write(motion_);
+  }
   DeviceLimits limits() const override { return limits_; }
   std::string Apply(const WaveplateMotion& motion) override {
     motion_ = motion;
+    if (record_ != nullptr) record_->Write(motion_);
     return {};
   }
   const WaveplateMotion& Applied() const override { return motion_; }
@@ -52,6 +59,7 @@ class SimulatedWaveplates final : public WaveplateBackend {
  private:
   DeviceLimits limits_;
   WaveplateMotion motion_;
+  DeviceRecord* record_;
 };
 
 }  // namespace dpc::services

@@ -156,5 +156,36 @@ TEST_F(BenchFailoverTest, WithoutAControllerTheDriverHoldsAndReportsThenResumes)
   }
 }
 
+TEST_F(BenchFailoverTest, ADriverRestartedAfterKillNineStartsWhereTheWaveplatesWereLeft) {
+  // The device record keeps the simulated waveplates' φ across the driver's death, as real
+  // waveplates stay where they are: the restarted driver starts there, not at the scenario's
+  // initial φ (a jump of 0.38 before), and the loop resumes without a step.
+  StartObserver(39);
+  Process& driver = StartDriver();
+  StartController("main", 0);
+  StartPolarimeter({"--rate-hz", "2000", "--static"});
+  ASSERT_TRUE(Eventually([&] { return AppliedBy("main") > 1000; }, 20s)) << Logs();
+  driver.Signal(SIGKILL);
+  ASSERT_TRUE(driver.Wait(5s).has_value());
+  const msg::WaveplateState last = *LatestState();
+  const size_t before = StateCount();
+  StartDriver({}, "driver_restarted");
+  ASSERT_TRUE(Eventually([&] { return StateCount() > before; }, 20s)) << Logs();
+  const auto first = States()[before].state;
+  EXPECT_LT(MaxAbsDifference(first.phi_applied(), last.phi_applied()), 0.01)
+      << "the restarted driver's first state is not where the waveplates were";
+  ASSERT_TRUE(Eventually([&] { return AppliedBy("main") > 500 + before; }, 20s)) << Logs();
+  const auto states = States();
+  double largest_step = 0.0;
+  for (size_t i = before + 1; i < states.size(); ++i) {
+    largest_step = std::max(largest_step, MaxAbsDifference(states[i].state.phi_applied(),
+                                                           states[i - 1].state.phi_applied()));
+  }
+  EXPECT_LT(largest_step, 0.05) << "a jump after the restart";
+  EXPECT_LT(MaxErrorDeg(states[before].state.publish_time_ns() + 100'000'000, states.back().state.publish_time_ns()),
+            5.0)
+      << "locked again after the restart";
+}
+
 }  // namespace
 }  // namespace dpc

@@ -67,7 +67,7 @@ class DpcTopicToolsTest : public dpc::testing::CommandLineTest {
   /// The bench on `domain`: driver, controller A, polarimeter at `rate_hz`.
   void StartBench(int domain, int rate_hz = 200) {
     const std::string d = std::to_string(domain);
-    Start("driver", {DPC_DRIVER_BINARY, "--domain", d});
+    Start("driver", {DPC_DRIVER_BINARY, "--domain", d, "--device-record", (dir_ / "driver.record").string()});
     Start("controller", {DPC_CONTROLLER_BINARY, "--domain", d, "--id", "A"});
     // --settle-samples 0: below 1 kHz the default 1000 exceeds the scenario's samples
     // (duration_s × rate) and the polarimeter refuses to start.

@@ -161,7 +161,7 @@ if [[ $CASE == server ]]; then
 fi
 
 # --- the bench: driver in A, controller in B, then the polarimeter in A ------------------------
-run_in "$NS_A" "$WORK/profile_a.xml" "$WORK/driver.log" "$DRIVER" --domain "$DOMAIN"
+run_in "$NS_A" "$WORK/profile_a.xml" "$WORK/driver.log" "$DRIVER" --domain "$DOMAIN" --device-record "$WORK/driver.record"
 t0=$(date +%s%N)
 run_in "$NS_B" "$WORK/profile_b.xml" "$WORK/controller.log" "$CONTROLLER" --domain "$DOMAIN" --id remote
 wait_for 30 "the controller (namespace B) to receive the device description from the driver (A)" \

@@ -78,8 +78,11 @@ class BenchFixture : public ::testing::Test {
     processes_.push_back(std::make_unique<Process>(args, dir_ + "/" + name + ".log"));
     return *processes_.back();
   }
-  Process& StartDriver(std::vector<std::string> args = {}) {
-    return Start(DPC_DRIVER_BINARY, std::move(args), "driver");
+  /// The driver, its device record (where the waveplates are, across its restarts) in the
+  /// test's directory.
+  Process& StartDriver(std::vector<std::string> args = {}, const std::string& name = "driver") {
+    args.insert(args.end(), {"--device-record", dir_ + "/driver.record"});
+    return Start(DPC_DRIVER_BINARY, std::move(args), name);
   }
   Process& StartController(const std::string& id, int priority, std::vector<std::string> args = {}) {
     args.insert(args.end(), {"--id", id, "--priority", std::to_string(priority)});
