@@ -5,9 +5,11 @@
 //   dpc-driver [SCENARIO] [--domain N] [--bench-id ID] [--max-slew-per-s X] [--min-silence-s T]
 
 #include <algorithm>
+#include <atomic>
 #include <memory>
 #include <mutex>
 
+#include <fmt/ostream.h>
 #include <spdlog/spdlog.h>
 
 #include "dpc/bench/clock.h"
@@ -87,6 +89,7 @@ class DriverService final : public Service {
         DeviceDescription{options.settings.driver_id, scenario_.stages, core_.max_slew_per_s(),
                           options.settings.max_ramp_s},
         bench_id_));
+    targets_revision_ = targets_.current().revision;
     target_writer_->Write(bus::TargetMessage(targets_.current(), bench_id_));
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -99,6 +102,11 @@ class DriverService final : public Service {
         bench_id_, [this](const msg::WaveplateCommand& message, const fdds::SampleInfo& info) {
           OnCommand(message, participant_.WriterPartition(info.sample_identity.writer_guid()));
         });
+    // Another driver on this bench: its target (TRANSIENT_LOCAL: a newcomer sees the one already
+    // there at once) comes from a writer of another participant. The driver that started
+    // later (a larger epoch in its revisions; ties: the larger participant GUID) leaves.
+    others_ = participant_.MakeReader<msg::Target>(
+        bench_id_, [this](const msg::Target& message, const fdds::SampleInfo& info) { OnTarget(message, info); });
     requests_ = participant_.MakeReader<msg::TargetRequest>(
         bench_id_, [this](const msg::TargetRequest& message, const auto&) { OnTargetRequest(message); });
     spdlog::info("{} controls, profiles {}, domain {}", core_.control_count(), participant_.profiles_file(),
@@ -107,6 +115,7 @@ class DriverService final : public Service {
 
   ~DriverService() override {
     // The readers' callbacks use the core: they go first.
+    others_.reset();
     commands_.reset();
     requests_.reset();
     samples_.reset();
@@ -127,6 +136,11 @@ class DriverService final : public Service {
         due_ns = std::clamp(core_.NextTickNs(), now_ns + tick_ns, now_ns + kMaxSleepNs);
       }
       if (WaitForStopUntil(std::chrono::steady_clock::time_point(std::chrono::nanoseconds(due_ns)))) break;
+    }
+    if (displaced_.load()) {
+      spdlog::error("another driver drives bench {}: this one (started later) leaves the waveplates to it",
+                    bench_id_);
+      return cli::ExitCode::kRuntimeError;
     }
     return cli::ExitCode::kOk;
   }
@@ -205,6 +219,23 @@ class DriverService final : public Service {
     rejections_.Update(core_.commands_rejected(), core_.last_rejection());
   }
 
+  void OnTarget(const msg::Target& message, const fdds::SampleInfo& info) {
+    const auto writer = info.sample_identity.writer_guid();
+    const auto own = participant_.raw()->guid();
+    if (writer.guidPrefix == own.guidPrefix) return;
+    const uint64_t mine = EpochOf(targets_revision_.load());
+    const uint64_t theirs = EpochOf(message.revision());
+    const bool i_am_later = mine > theirs || (mine == theirs && writer.guidPrefix < own.guidPrefix);
+    std::lock_guard<std::mutex> lock(mutex_);
+    log_.Log(spdlog::level::err, "second driver",
+             fmt::format("a second driver on bench {} (participant {}, started {} s {} this one)", bench_id_,
+                         fmt::streamed(writer.guidPrefix), mine > theirs ? mine - theirs : theirs - mine,
+                         mine >= theirs ? "before" : "after"));
+    if (i_am_later && !displaced_.exchange(true)) stop();
+  }
+
+  static uint64_t EpochOf(uint64_t revision) { return revision >> 32; }
+
   void OnTargetRequest(const msg::TargetRequest& request) {
     const std::string request_id = request.request_id().to_string();
     std::lock_guard<std::mutex> lock(mutex_);
@@ -251,6 +282,9 @@ class DriverService final : public Service {
   std::unique_ptr<bus::Reader<msg::StokesSample>> samples_;
   std::unique_ptr<bus::Reader<msg::WaveplateCommand>> commands_;
   std::unique_ptr<bus::Reader<msg::TargetRequest>> requests_;
+  std::unique_ptr<bus::Reader<msg::Target>> others_;  ///< other drivers' targets
+  std::atomic<uint64_t> targets_revision_{0};  ///< the first revision this driver published
+  std::atomic<bool> displaced_{false};
 };
 
 }  // namespace

@@ -118,5 +118,24 @@ TEST_F(BenchInputTest, ACommandInTheNameOfAnotherControllerIsRefusedAndNeverAppl
   EXPECT_TRUE(SoonObeys("A"));
 }
 
+TEST_F(BenchInputTest, ASecondDriverOnTheBenchIsDetectedAndTheLaterOneLeaves) {
+  StartObserver(38);
+  StartDriver();
+  StartController("A", 0);
+  StartPolarimeter({"--rate-hz", "1000"});
+  ASSERT_TRUE(Eventually([&] { return AppliedBy("A") > 200; }, 20s)) << Logs();
+  // A second driver of bench1 (its own device record): it sees the first one's target and exits.
+  Process& second = Start(DPC_DRIVER_BINARY, {"--device-record", dir_ + "/second.record"}, "second_driver");
+  const auto code = second.Wait(15s);
+  ASSERT_TRUE(code.has_value()) << "the second driver kept running: " << Logs();
+  EXPECT_EQ(*code, 1);
+  EXPECT_NE(second.Log().find("another driver drives bench bench1"), std::string::npos) << second.Log();
+  // The first one saw it too, said so, and drives on.
+  const size_t applied = AppliedBy("A");
+  EXPECT_TRUE(Eventually([&] { return AppliedBy("A") > applied + 200; }, 10s));
+  EXPECT_TRUE(SoonObeys("A"));
+  EXPECT_NE(Logs().find("a second driver on bench bench1"), std::string::npos) << Logs();
+}
+
 }  // namespace
 }  // namespace dpc
