@@ -16,7 +16,7 @@ PACKAGES=(
   gnuplot-nox time
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   cyclonedds-dev cyclonedds-tools iproute2 procps python3
-  openssl
+  openssl clang libclang-rt-14-dev
 )
 
 missing=()

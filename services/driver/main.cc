@@ -31,6 +31,11 @@ namespace fdds = eprosima::fastdds::dds;
 ScenarioConfig LoadDriverScenario(const CommonOptions& common) {
   ScenarioConfig scenario = LoadServiceScenario(common);
   ValidateScenario(scenario);
+  if (const int controls = ScenarioControlCount(scenario.stages); controls > static_cast<int>(msg::MAX_CONTROLS)) {
+    throw ConfigurationError(fmt::format("invalid scenario: stages: {} controls, more than the {} a bench command "
+                                         "carries (idl/dpc/bench.idl MAX_CONTROLS)",
+                                         controls, msg::MAX_CONTROLS));
+  }
   return scenario;
 }
 

@@ -35,11 +35,20 @@ ControlMapConfig MapConfig(const msg::ControlMap& map, const std::string& path) 
       throw std::invalid_argument(fmt::format("{}.kind: unknown control map kind {}", path,
                                               static_cast<int>(map.kind())));
   }
+  for (const auto* values : {&map.coefficients_rad(), &map.table_control(), &map.table_angle_rad()}) {
+    if (values->size() > msg::MAX_MAP_POINTS) {
+      throw std::invalid_argument(fmt::format("{}: {} points, more than the {} a control map may have (oversized)",
+                                              path, values->size(), msg::MAX_MAP_POINTS));
+    }
+  }
   out.rad_per_unit = map.rad_per_unit();
   out.offset_rad = map.offset_rad();
-  out.coefficients_rad = map.coefficients_rad();
-  out.table_control = map.table_control();
-  out.table_angle_rad = map.table_angle_rad();
+  // Only what the kind uses: nothing a check skipped is kept.
+  if (out.kind == ControlMapConfig::Kind::kPolynomial) out.coefficients_rad = map.coefficients_rad();
+  if (out.kind == ControlMapConfig::Kind::kTable) {
+    out.table_control = map.table_control();
+    out.table_angle_rad = map.table_angle_rad();
+  }
   return out;
 }
 
@@ -199,6 +208,10 @@ void WriteCommand(const ControllerCommand& command, const std::string& bench_id,
 
 std::string ReadState(const msg::WaveplateState& message, int control_count, DriverState* out) {
   const size_t controls = static_cast<size_t>(control_count);
+  if (message.phi_applied().size() > msg::MAX_CONTROLS) {
+    return fmt::format("phi_applied has {} values, more than the {} any device may have (oversized)",
+                       message.phi_applied().size(), msg::MAX_CONTROLS);
+  }
   if (message.phi_applied().size() != controls) {
     return fmt::format("phi_applied has {} values, the device has {} controls",
                        message.phi_applied().size(), controls);
@@ -244,6 +257,16 @@ std::string ReadState(const msg::WaveplateState& message, int control_count, Dri
   motion.start_ns = message.ramp_start_time_ns();
   motion.end_ns = rated ? message.ramp_end_time_ns() : message.ramp_start_time_ns();
   motion.moving = moving && motion.end_ns > motion.start_ns;
+  if (motion.moving) {
+    // Each value finite is not enough: φ + φ̇·T must be too (1e308 + 1e308·1 s is not).
+    ControlVector end(control_count);
+    motion.At(motion.end_ns, &end);
+    for (Eigen::Index i = 0; i < end.size(); ++i) {
+      if (!std::isfinite(end[i])) {
+        return fmt::format("the motion of control {} does not stay finite over its ramp", i);
+      }
+    }
+  }
   out->saturated.fill(false);
   for (size_t i = 0; i < message.saturated().size(); ++i) out->saturated[i] = message.saturated()[i];
   out->mode = message.mode() == msg::DRIVER_ACTIVE ? DriverMode::kActive : DriverMode::kHolding;
@@ -331,6 +354,10 @@ std::string ReadDevice(const msg::DeviceDescription& message, DeviceDescription*
       stages.push_back(std::move(stage));
     }
     ValidateDeviceStages(stages);
+    if (const int controls = ScenarioControlCount(stages); controls > static_cast<int>(msg::MAX_CONTROLS)) {
+      return fmt::format("device: {} controls, more than the {} a command can carry (oversized)", controls,
+                         msg::MAX_CONTROLS);
+    }
     if (!(std::isfinite(message.max_slew_per_s()) && message.max_slew_per_s() >= 0.0)) {
       return fmt::format("max_slew_per_s = {} is not a finite rate >= 0", message.max_slew_per_s());
     }

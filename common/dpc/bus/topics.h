@@ -24,10 +24,31 @@
 #include <string>
 #include <string_view>
 
+#include <fastcdr/exceptions/Exception.h>
+
 #include "dpc/msg/bench.h"
 #include "dpc/msg/benchPubSubTypes.h"
 
 namespace dpc::bus {
+
+/// The generated type support, made safe against hostile payloads: fastddsgen 2.3.0's
+/// deserialize catches only Fast CDR's NotEnoughMemoryException, and a BadParamException (an
+/// encapsulation byte that is not 0, an unknown encapsulation kind, a boolean that is neither 0
+/// nor 1) went up through Fast DDS's receive thread and ended the process with std::terminate
+/// (one datagram from anyone aborted any service). Here every Fast CDR exception drops the
+/// sample, as a truncated payload already did. (Fixed upstream in Fast-DDS-Gen, eProsima
+/// Fast-DDS-Gen#168; tests/fuzz found it.)
+template <typename Generated>
+class SafePubSubType : public Generated {
+ public:
+  bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t* payload, void* data) override {
+    try {
+      return Generated::deserialize(payload, data);
+    } catch (const eprosima::fastcdr::exception::Exception&) {
+      return false;
+    }
+  }
+};
 
 template <typename Message>
 struct TopicTraits;
@@ -35,7 +56,7 @@ struct TopicTraits;
 #define DPC_BUS_TOPIC(Message, topic_name, per_controller)                  \
   template <>                                                               \
   struct TopicTraits<msg::Message> {                                        \
-    using PubSubType = msg::Message##PubSubType;                            \
+    using PubSubType = SafePubSubType<msg::Message##PubSubType>;            \
     static constexpr std::string_view kTopic = topic_name;                  \
     static constexpr std::string_view kWriterProfile = topic_name ".writer"; \
     static constexpr std::string_view kReaderProfile = topic_name ".reader"; \
