@@ -95,7 +95,7 @@ std::string MonitorState::TakeLine(double elapsed_s) {
   std::string line = fmt::format(
       "{} | phi {} | rate_hz {:.1f} | {} | missed_deadlines {} | target r{}", error,
       have_state_ ? FormatValues(phi_applied_.data(), phi_applied_.size(), 3) : "-", rate_hz, driver,
-      missed.empty() ? "-" : missed, target_revision_);
+      missed.empty() ? "-" : missed, RevisionCount(target_revision_));
   period_samples_ = 0;
   period_errors_ = 0;
   period_error_sum_deg_ = 0.0;

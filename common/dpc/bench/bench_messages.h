@@ -90,10 +90,16 @@ struct DeviceDescription {
 
 /// The target and its revision (Target).
 struct BenchTarget {
-  uint64_t revision = 0;             ///< grows with every accepted change
+  uint64_t revision = 0;             ///< grows with every accepted change: epoch << 32 | count
   std::string request_id;            ///< the request that set it (empty: the scenario)
   TargetConfig target;               ///< valid (ValidateTargetConfig)
 };
+
+/// The parts of a target revision: the driver's epoch (its start, wall-clock seconds) and the
+/// count of targets within it (1 = the scenario's).
+inline uint32_t RevisionEpoch(uint64_t revision) { return static_cast<uint32_t>(revision >> 32); }
+inline uint32_t RevisionCount(uint64_t revision) { return static_cast<uint32_t>(revision); }
+
 
 /// A controller's health and the law's diagnostics (ControllerStatus).
 struct ControllerStatusReport {
