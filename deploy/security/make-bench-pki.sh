@@ -51,18 +51,27 @@ set -euo pipefail
 # on the wire); dpc_* payloads encrypted; every submessage signed (nothing can be injected or
 # altered) but not encrypted a second time; no whole-message protection on top (it would encrypt
 # everything once more). SPDP and the authentication handshake are always in clear: they carry
-# the participant's certificate and its signed permissions document.
-RTPS_PROTECTION=NONE
-DISCOVERY_PROTECTION=ENCRYPT
-LIVELINESS_PROTECTION=ENCRYPT
-METADATA_PROTECTION=SIGN
-DATA_PROTECTION=ENCRYPT
+# the participant's certificate and its signed permissions document. Each kind can be changed
+# for the governance this run writes (DPC_RTPS_PROTECTION, DPC_DISCOVERY_PROTECTION,
+# DPC_LIVELINESS_PROTECTION, DPC_METADATA_PROTECTION, DPC_DATA_PROTECTION = NONE|SIGN|ENCRYPT),
+# e.g. to measure what each costs (dpc_bus_benchmark --only security); without submessage
+# protection (metadata NONE) submessages spoofing a bench writer (its sequence numbers, its
+# heartbeats) are not detected.
+RTPS_PROTECTION=${DPC_RTPS_PROTECTION:-NONE}
+DISCOVERY_PROTECTION=${DPC_DISCOVERY_PROTECTION:-ENCRYPT}
+LIVELINESS_PROTECTION=${DPC_LIVELINESS_PROTECTION:-ENCRYPT}
+METADATA_PROTECTION=${DPC_METADATA_PROTECTION:-SIGN}
+DATA_PROTECTION=${DPC_DATA_PROTECTION:-ENCRYPT}
 TOPICS="dpc_stokes_sample dpc_waveplate_command dpc_waveplate_state dpc_controller_status
         dpc_device_description dpc_target dpc_target_request dpc_target_reply"
 
 OUT="" BENCH=bench1 CONTROLLERS=main,standby DAYS=365 DOMAINS="" ROTATE=0 EXPIRED=""
 usage() { awk 'NR > 1 && !/^#/ { exit } NR > 1 { sub(/^# ?/, ""); print }' "${BASH_SOURCE[0]}" >&2; exit 2; }
 die() { echo "make-bench-pki.sh: $*" >&2; exit 2; }
+for kind in RTPS DISCOVERY LIVELINESS METADATA DATA; do
+  value=${kind}_PROTECTION
+  [[ "${!value}" =~ ^(NONE|SIGN|ENCRYPT)$ ]] || die "DPC_${kind}_PROTECTION=${!value}: NONE, SIGN or ENCRYPT"
+done
 while [[ $# -gt 0 ]]; do
   case $1 in
     --out) OUT=${2:?}; shift 2 ;;
@@ -265,7 +274,8 @@ grant_rules() {
   case $1 in
     driver)
       rule publish "$B" dpc_waveplate_state dpc_device_description dpc_target dpc_target_reply
-      rule subscribe "$B" dpc_stokes_sample dpc_target_request dpc_controller_status
+      # dpc_target: another driver on the bench shows itself by its target (driver main.cc)
+      rule subscribe "$B" dpc_stokes_sample dpc_target_request dpc_controller_status dpc_target
       rule subscribe "$ctl.*" dpc_waveplate_command ;;
     polarimeter)
       rule publish "$B" dpc_stokes_sample
