@@ -11,6 +11,18 @@
 #   DPC_DDS_ADDRESS=ADDR             this container's address (default: `hostname -i`); the UDPv4
 #                                    transport is whitelisted to it and nothing else
 # With none of them, the services use their compiled-in loopback profile (this container only).
+#
+# DDS Security:
+#   DPC_SECURITY_DIR=DIR   the bench's credentials (make-bench-pki.sh); every service and dpc
+#                          command takes its identity from there (DPC_IDENTITY, or its role). The
+#                          entrypoint waits (DPC_SECURITY_WAIT_S, 60 s) for DIR/ready, which the
+#                          compose file's pki service writes once the credentials are made.
+#   DPC_SECURITY=off       run without security even if DPC_SECURITY_DIR is set
+#   command "make-bench-pki --out PRIVATE ARGS…"   (as root) makes the credentials with ARGS in
+#                          PRIVATE and gives each container a directory in DPC_PKI_PUBLIC with
+#                          only its identity (never the CA's key): <identity>/ for each one,
+#                          tools/ with operator and observer; hands them to DPC_PKI_OWNER
+#                          (10001:10001, the image's dpc user) and writes ready in each
 set -euo pipefail
 
 fastdds_dir="${DPC_FASTDDS_DIR:-/opt/dpc/share/dpc/fastdds}"
@@ -35,6 +47,60 @@ client_profile() {
   export FASTRTPS_DEFAULT_PROFILES_FILE="$profile"
   echo "dpc-entrypoint: UDPv4 on $address, $3" >&2
 }
+
+if [[ "${1:-}" == "make-bench-pki" ]]; then
+  # make-bench-pki --out PRIVATE ARGS…: the CA and everything in PRIVATE (the CA's key never
+  # leaves it). Each container gets a directory of its own in DPC_PKI_PUBLIC holding only what
+  # it needs: the CA certificate, the governance and its identity's key, certificate and
+  # permissions (the layout --security-dir reads): DPC_PKI_PUBLIC/<identity>/ for every
+  # identity, and DPC_PKI_PUBLIC/tools/ with the operator and the observer. Written in place
+  # (the directories may already be bind-mounted), handed to DPC_PKI_OWNER, marked ready.
+  shift
+  out=""
+  for ((i = 1; i <= $#; i++)); do [[ "${!i}" == "--out" ]] && { j=$((i + 1)); out="${!j}"; }; done
+  [[ -n "$out" ]] || fail "make-bench-pki needs --out DIR"
+  public="${DPC_PKI_PUBLIC:?make-bench-pki needs DPC_PKI_PUBLIC}"
+  mkdir -p "$public"
+  rm -f "$public"/*/ready
+  make-bench-pki "$@"
+  grant() {  # grant CONTAINER IDENTITY…
+    local dir="$public/$1" identity
+    shift
+    mkdir -p "$dir/ca"
+    rm -f "$dir/ready"
+    # Only what this container needs: nothing left from an earlier run or another identity.
+    find "$dir" -mindepth 1 -maxdepth 1 ! -name ca -exec rm -rf {} +
+    cp "$out/ca/ca.cert.pem" "$dir/ca/"
+    cp "$out/governance.p7s" "$dir/"
+    for identity in "$@"; do
+      mkdir -p "$dir/$identity"
+      cp "$out/$identity"/key.pem "$out/$identity"/cert.pem "$out/$identity"/permissions.p7s "$dir/$identity/"
+    done
+    chown -R "${DPC_PKI_OWNER:-10001:10001}" "$dir"
+    touch "$dir/ready"
+  }
+  for identity in "$out"/*/; do
+    name=$(basename "$identity")
+    [[ "$name" == ca ]] || grant "$name" "$name"
+  done
+  grant tools operator observer
+  echo "dpc-entrypoint: credentials in $public/<identity> and $public/tools (the CA and its key in $out)" >&2
+  exit 0
+fi
+
+if [[ "${DPC_SECURITY:-on}" == "off" ]]; then
+  unset DPC_SECURITY_DIR
+elif [[ -n "${DPC_SECURITY_DIR:-}" ]]; then
+  waited=0
+  until [[ -e "$DPC_SECURITY_DIR/ready" ]]; do
+    ((waited < ${DPC_SECURITY_WAIT_S:-60} * 5)) || fail "no credentials in DPC_SECURITY_DIR=$DPC_SECURITY_DIR (is the pki service done?)"
+    ((waited)) || echo "dpc-entrypoint: waiting for the credentials in $DPC_SECURITY_DIR" >&2
+    waited=$((waited + 1))
+    sleep 0.2
+  done
+  export DPC_SECURITY_DIR
+  echo "dpc-entrypoint: DDS Security with the credentials in $DPC_SECURITY_DIR" >&2
+fi
 
 if [[ -n "${FASTRTPS_DEFAULT_PROFILES_FILE:-}" ]]; then
   [[ -r "$FASTRTPS_DEFAULT_PROFILES_FILE" ]] ||

@@ -9,12 +9,20 @@
 #   DPC_NET_PREFIX=10.99.12 deploy/host-dpc.sh … # another compose network
 #   DPC_HOST_PROFILE_ARGS=--server deploy/host-dpc.sh …   # with deploy/compose/discovery-server.yml
 # DPC_BINARY overrides the tool (default: build/tools/dpc/dpc); DPC_WAIT_S how long to wait (60).
+# DDS Security: the compose bench's tools credentials ($DPC_PKI_DIR/bench/tools, by default
+# ./deploy/security/compose-pki/bench/tools: the observer, and the operator for `dpc target`;
+# made by its pki service, owned by the image's user 10001: run as root or that user) are used
+# when they exist, unless DPC_SECURITY=off.
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 prefix="${DPC_NET_PREFIX:-10.99.10}"
 dpc="${DPC_BINARY:-$here/../build/tools/dpc/dpc}"
 [[ -x "$dpc" ]] || { echo "host-dpc.sh: $dpc not built (scripts/setup.sh builds it)" >&2; exit 2; }
 [[ $# -gt 0 ]] || set -- monitor
+pki="${DPC_PKI_DIR:-$here/security/compose-pki}/bench/tools"
+if [[ "${DPC_SECURITY:-on}" != "off" && -z "${DPC_SECURITY_DIR:-}" && -e "$pki/ready" ]]; then
+  export DPC_SECURITY_DIR="$pki"
+fi
 
 deadline=$((SECONDS + ${DPC_WAIT_S:-60}))
 announced=0

@@ -249,8 +249,9 @@ class Bench:
         return items[-1][1] if items else None
 
 
-def cyclone_reads(probe, prefix, work):
-    """Another vendor's subscriber on the host (Cyclone DDS, deploy/cyclonedds/compose-host.xml)."""
+def cyclone_reads(probe, prefix, work, secure=False):
+    """Another vendor's subscriber on the host (Cyclone DDS, deploy/cyclonedds/compose-host.xml),
+    without credentials: it reads the bench if the bench is open, nothing if it is secure."""
     with open(os.path.join(REPO, "deploy", "cyclonedds", "compose-host.xml")) as f:
         config = f.read().replace("10.99.10.", prefix + ".")
     path = os.path.join(work, "cyclone-host.xml")
@@ -264,6 +265,11 @@ def cyclone_reads(probe, prefix, work):
             topics.add(json.loads(line).get("topic"))
         except ValueError:
             pass
+    if secure:
+        expect("dpc_waveplate_state" not in topics and "dpc_device_description" not in topics,
+               f"a Cyclone DDS subscriber without credentials reads nothing of the secure bench "
+               f"(topics {sorted(t for t in topics if t)})")
+        return
     expect(result.returncode == 0 and "dpc_waveplate_state" in topics,
            f"a Cyclone DDS subscriber on the host reads the bench (topics {sorted(t for t in topics if t)})")
 

@@ -8,8 +8,11 @@ Steps (each prints what it saw; the figures at the end are the issue's closing f
      docker-compose, debootstrap) and started (and stopped again at the end, by PID); else the
      test is skipped (exit 77) with the reason.
   2. The base image: deploy/make-base-image.sh builds debian:bookworm-slim where it is missing.
-  3. Build the image; `up` the bench with the standby controller; the output locks to the target,
-     seen from the host by `dpc topic echo` through the network's gateway.
+  3. Build the image; `up` the bench with the standby controller, secured (DDS Security, the
+     credentials made by the pki service); the output locks to the target, seen from the host by
+     `dpc topic echo` (observer identity) through the network's gateway. A container without
+     credentials, and one with the observer identity, fail to change the target; the operator
+     identity changes it.
   4. `kill` of the controller container: the standby takes over, the output stays locked.
   5. `docker network disconnect` of the solver for longer than the deadlines: the driver holds
      and says why; reconnect: control resumes from the held φ, without a jump.
@@ -36,12 +39,31 @@ from compose_support import (  # noqa: E402
     run)
 
 
+def attempts_to_command(project):
+    """`dpc target` from a tools container: without credentials and as the observer (both must
+    fail), then as the operator (must be accepted)."""
+    def target(*env):
+        extra = [a for e in env for a in ("-e", e)]
+        return project("run", "--rm", "--no-deps", *extra, "tools", "dpc", "target", "--domain", DOMAIN,
+                       "--bench-id", BENCH_ID, "--point", "0", "0.6", "0.8", "--timeout-s", "15",
+                       check=False, timeout=120)
+    for what, env in (("without credentials", ("DPC_SECURITY=off",)), ("as the observer", ("DPC_IDENTITY=observer",))):
+        result = target(*env)
+        expect(result.returncode != 0 and "accepted" not in result.stdout,
+               f"a tools container {what} cannot change the target (exit {result.returncode}: "
+               f"{(result.stdout or '').strip().splitlines()[-2:]})")
+    result = target()
+    expect(result.returncode == 0, f"the operator identity changes the target (exit {result.returncode}: "
+                                   f"{(result.stdout or '').strip().splitlines()[-4:]})")
+
+
 def failover_and_hold(args, base, work):
     figures = {}
+    pki = os.path.join(work, "pki")
     project = Project(base, "dpcsystest", ["docker-compose.yml"], {
         "DPC_NET_PREFIX": PREFIX, "DPC_IMAGE": IMAGE, "DPC_DOMAIN": DOMAIN, "DPC_BENCH_ID": BENCH_ID,
         "DPC_RATE_HZ": str(args.rate_hz), "DPC_SCRAMBLER_RAD_PER_S": str(args.scrambler_rad_per_s),
-        "COMPOSE_PROFILES": "standby"})
+        "COMPOSE_PROFILES": "standby", "DPC_PKI_DIR": pki})
     project.down()
     bench = None
     try:
@@ -59,13 +81,32 @@ def failover_and_hold(args, base, work):
         up_started = time.monotonic()
         project("up", "-d", timeout=300)
         figures["up_command_s"] = time.monotonic() - up_started
+        credentials = os.path.join(pki, "bench", "tools")
+        deadline = time.monotonic() + 60
+        while not os.path.exists(os.path.join(credentials, "ready")) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        expect(os.path.exists(os.path.join(credentials, "ready")), f"the pki service made the credentials ({credentials})")
+        for service, identity in (("driver", "driver"), ("polarimeter", "polarimeter"),
+                                  ("controller", "controller-main"), ("controller-standby", "controller-standby")):
+            seen = project("exec", "-T", service, "find", "/pki", "-mindepth", "1", "-maxdepth", "2").stdout.split()
+            wanted = ["/pki/ca", "/pki/ca/ca.cert.pem", "/pki/governance.p7s", "/pki/ready", f"/pki/{identity}",
+                      f"/pki/{identity}/cert.pem", f"/pki/{identity}/key.pem", f"/pki/{identity}/permissions.p7s"]
+            expect(sorted(seen) == sorted(wanted),
+                   f"the {service} container sees its own identity only, never the CA's key ({sorted(seen)})")
+        os.environ["DPC_SECURITY_DIR"] = credentials  # the host's tools: the observer identity
         bench = Bench(args.dpc, host_profile(PREFIX, False, work))
         bench.wait(lambda: bench.locked_since(up_started) is not None, 90, "the output to lock")
         figures["up_to_locked_s"] = bench.locked_since(up_started) - up_started
         log(f"locked {figures['up_to_locked_s']:.2f} s after `up` (the command took {figures['up_command_s']:.2f} s)")
         # The lock is judged from the samples; the states arrive on their own topic.
+        # The standby may be obeyed first (it can be heard before main); main's priority wins.
         bench.wait(lambda: bench.latest_state() is not None, 20, "the driver's state")
-        state = bench.latest_state()
+        deadline = time.monotonic() + 20
+        while time.monotonic() < deadline:
+            state = bench.latest_state()
+            if state["mode"] == "DRIVER_ACTIVE" and state["obeyed_controller_id"] == "main":
+                break
+            time.sleep(0.1)
         expect(state["mode"] == "DRIVER_ACTIVE" and state["obeyed_controller_id"] == "main",
                f"the driver obeys the main controller ({state['reason']})")
         network = f"{project.name}_bench"
@@ -74,7 +115,8 @@ def failover_and_hold(args, base, work):
         expect(info["Internal"] and subnets == [f"{PREFIX}.0/24"],
                f"the network {network} is internal, subnet {subnets} (no route out of the machine)")
         if args.cyclone_probe:
-            cyclone_reads(args.cyclone_probe, PREFIX, work)
+            cyclone_reads(args.cyclone_probe, PREFIX, work, secure=True)
+        attempts_to_command(project)
 
         # --- kill of the controller container → the standby takes over ---------------------------
         time.sleep(1.0)
@@ -126,7 +168,9 @@ def failover_and_hold(args, base, work):
         time.sleep(max(0.0, args.disconnect_s - (time.monotonic() - disconnected)))
         held = [m for _, m in bench.states.snapshot(disconnected) if m["mode"] == "DRIVER_HOLDING"]
         expect(len(held) >= 5 and all(m["phi_applied"] == held[0]["phi_applied"] for m in held),
-               f"{len(held)} holding heartbeats, all with the same φ")
+               f"{len(held)} holding heartbeats, all with the same φ (distinct: "
+               f"{sorted({tuple(m['phi_applied']) for m in held})[:4]}; reasons "
+               f"{sorted({m['reason'] for m in held})[:3]})")
         last_sample = max(m["sequence_number"] for _, m in bench.samples.snapshot(disconnected - 0.5))
         reconnect = time.monotonic()
         run(["docker", "network", "connect", "--ip", f"{PREFIX}.21", network, standby])
@@ -175,6 +219,8 @@ def failover_and_hold(args, base, work):
 
 
 def split_deployment(args, base, work):
+    # Through a discovery server, which Fast DDS 2.9 cannot secure: an open bench.
+    os.environ.pop("DPC_SECURITY_DIR", None)
     figures = {}
     common = {"DPC_NET_PREFIX": SPLIT_PREFIX, "DPC_IMAGE": IMAGE, "DPC_DOMAIN": DOMAIN, "DPC_BENCH_ID": BENCH_ID,
               "DPC_RATE_HZ": str(args.rate_hz), "DPC_SCRAMBLER_RAD_PER_S": str(args.scrambler_rad_per_s)}
@@ -218,7 +264,7 @@ def split_deployment(args, base, work):
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--dpc", required=True, help="the host's dpc tool (build/tools/dpc/dpc)")
-    parser.add_argument("--rate-hz", type=int, default=2000, help="the polarimeter's rate in the test")
+    parser.add_argument("--rate-hz", type=int, default=500, help="the polarimeter's rate in the test")
     parser.add_argument("--scrambler-rad-per-s", type=float, default=0.2,
                         help="the input's rotation rate (slow, so that a jump at resume stands out)")
     parser.add_argument("--disconnect-s", type=float, default=1.5, help="how long the solver is cut off")
