@@ -20,9 +20,11 @@
 //   rate     real time at 5, 10, 15, 20 kHz: overruns and missed deadlines over the run; the
 //            raw references: samples paced at the same rate, echoed by a second process, and
 //            relayed through the three-process chain
-//   failover kill -9 of the obeyed controller with a standby: gap between the last command of
-//            the killed one and the first of the standby applied by the driver; the raw DDS
-//            reference: kill -9 of the stronger of two EXCLUSIVE-ownership writers
+//   failover kill -9 of the obeyed controller with a standby, at 2 and 10 kHz: gap between the
+//            last command of the killed one and the first of the standby applied by the
+//            driver, the error excursion over the steady-state p99, needless switches while
+//            both are alive; the raw DDS reference: kill -9 of the stronger of two
+//            EXCLUSIVE-ownership writers
 //   tracking real time at 10 kHz, the scrambler (kicks per bench sample, and the paper's own
 //            diffusion) and a deterministic rotation at increasing
 //            rates: mean error without prediction, predicting across the latency, and with
