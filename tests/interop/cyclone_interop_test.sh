@@ -8,7 +8,7 @@
 #    (3 fixed-axis stages on [1,0,0], [0,0,1], [1,0,0], linear maps θ = π·φ), the target (revision
 #    1, point [0, 0.6, 0.8]) and waveplate states (φ = the scenario's initial φ, exactly).
 # 2. Cyclone writes a TargetRequest; the driver accepts it (reply accepted, revision 2) and
-#    publishes dpc_target revision 2 with Cyclone's request id and point, read back by Cyclone.
+#    publishes dpc_target revision 2 (of the driver's epoch) with Cyclone's request id and point, read back by Cyclone.
 # Domain 61 (the project's test range is 60–79) and a bench id with this PID keep concurrent
 # runs apart.
 set -euo pipefail
@@ -86,10 +86,13 @@ echo "ok: device description (3 stages, axes [1,0,0] [0,0,1] [1,0,0], θ = π·�
 
 jq -se --arg b "$BENCH" '
   map(select(.topic == "dpc_target")) | last |
-  .bench_id == $b and .revision == 1 and .request_id == "" and .kind == "TARGET_POINT" and
-  .point == [0, 0.6, 0.8]
+  .bench_id == $b and .request_id == "" and .kind == "TARGET_POINT" and .point == [0, 0.6, 0.8]
 ' "$J1" >/dev/null || fail "target not intact: $(jq -c 'select(.topic == "dpc_target")' "$J1")"
-echo "ok: target revision 1, point [0, 0.6, 0.8] read by Cyclone"
+# The revision is epoch << 32 | count: 64 bits, beyond jq's doubles; read from the text.
+revision=$(grep '"topic":"dpc_target"' "$J1" | tail -1 | grep -o '"revision":[0-9]*' | cut -d: -f2)
+[[ -n "$revision" && $((revision & 0xffffffff)) -eq 1 && $((revision >> 32)) -gt 0 ]] ||
+  fail "target revision ${revision:-missing}: not the first of a driver's epoch"
+echo "ok: target revision 1 of epoch $((revision >> 32)), point [0, 0.6, 0.8] read by Cyclone"
 
 jq -se --arg b "$BENCH" '
   map(select(.topic == "dpc_waveplate_state")) |
@@ -108,23 +111,28 @@ kill -0 "$DRIVER_PID" 2>/dev/null || fail "dpc-driver exited"
 cat "$WORK/probe2.err"
 J2="$WORK/probe2.jsonl"
 
+# Revisions are epoch << 32 | count (64 bits, beyond jq's doubles): compared as text.
+epoch=$((revision >> 32))
+second=$(((epoch << 32) | 2))
 jq -se --arg b "$BENCH" --arg r "$REQ" '
   map(select(.topic == "dpc_target" and .request_id == $r)) | last |
-  .bench_id == $b and .revision == 2 and .kind == "TARGET_POINT" and .point == [0.6, 0.8, 0]
-' "$J2" >/dev/null || fail "no target revision 2 for request $REQ: $(jq -c 'select(.topic == "dpc_target")' "$J2")"
+  .bench_id == $b and .kind == "TARGET_POINT" and .point == [0.6, 0.8, 0]
+' "$J2" >/dev/null || fail "no target for request $REQ: $(jq -c 'select(.topic == "dpc_target")' "$J2")"
+grep '"topic":"dpc_target"' "$J2" | grep "\"request_id\":\"$REQ\"" | grep -q "\"revision\":$second," ||
+  fail "the target for request $REQ is not revision 2 of epoch $epoch ($second): $(grep '"topic":"dpc_target"' "$J2")"
 echo "ok: the driver published target revision 2, point [0.6, 0.8, 0], request $REQ (read by Cyclone)"
 
 # The reply (VOLATILE) is checked when Cyclone got it; the driver's log confirms the acceptance.
 if jq -se --arg r "$REQ" 'map(select(.topic == "dpc_target_reply" and .request_id == $r)) |
                           length > 0' "$J2" >/dev/null; then
-  jq -se --arg r "$REQ" 'map(select(.topic == "dpc_target_reply" and .request_id == $r)) |
-                         all(.accepted and .revision == 2)' "$J2" >/dev/null ||
-    fail "the driver's reply is not 'accepted, revision 2': $(jq -c 'select(.topic == "dpc_target_reply")' "$J2")"
+  replies=$(grep '"topic":"dpc_target_reply"' "$J2" | grep "\"request_id\":\"$REQ\"")
+  jq -se 'all(.accepted)' <<<"$replies" >/dev/null && ! grep -vq "\"revision\":$second," <<<"$replies" ||
+    fail "the driver's reply is not 'accepted, revision 2': $replies"
   echo "ok: TargetReply accepted, revision 2 (read by Cyclone)"
 else
   echo "note: Cyclone did not receive the driver's TargetReply within 1 s of the new target"
 fi
-grep -q "target revision 2 (request $REQ)" "$WORK/driver.log" ||
-  fail "the driver's log does not report target revision 2 for $REQ"
-echo "ok: dpc-driver logged: $(grep "target revision 2" "$WORK/driver.log" | head -1)"
+grep -q "target revision $second (request $REQ)" "$WORK/driver.log" ||
+  fail "the driver's log does not report target revision $second for $REQ"
+echo "ok: dpc-driver logged: $(grep "target revision $second" "$WORK/driver.log" | head -1)"
 echo "PASS"
