@@ -38,7 +38,7 @@ struct StateLog {
   std::unique_ptr<bus::Reader<msg::WaveplateState>> reader;
   std::unique_ptr<bus::Reader<msg::StokesSample>> samples;
   explicit StateLog(int domain) {
-    participant = std::make_unique<bus::BusParticipant>(bus::BusOptions{domain, "dpc-bench-observer"});
+    participant = std::make_unique<bus::BusParticipant>(bus::BusOptions{domain, "dpc-bench-observer", {}});
     reader = participant->MakeReader<msg::WaveplateState>("bench1", [this](const msg::WaveplateState& s, const auto&) {
       std::lock_guard<std::mutex> lock(mutex);
       states.push_back(s);

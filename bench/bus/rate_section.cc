@@ -38,7 +38,7 @@ struct RawRateResult {
 /// answers. On the bench's own domain: the services are stopped by then.
 RawRateResult RawRate(const BusBenchmarkHarness& harness, double rate_hz, double seconds, bool chain) {
   const auto echoes = StartEchoes(harness, harness.domain, chain, "_rate");
-  bus::BusParticipant participant({harness.domain, "dpc-bench-rate"});
+  bus::BusParticipant participant({harness.domain, "dpc-bench-rate", {}});
   auto writer = participant.MakeWriter<msg::StokesSample>("");
   std::atomic<uint64_t> answers{0};
   auto reader = participant.MakeReader<msg::WaveplateState>("", [&](const msg::WaveplateState&, const auto&) {

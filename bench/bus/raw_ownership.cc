@@ -49,7 +49,7 @@ class OwnedReader : public fdds::DataReaderListener {
 }  // namespace
 
 int RunRawOwner(int domain, int strength, double rate_hz) {
-  bus::BusParticipant participant({domain, "dpc-bench-owner"});
+  bus::BusParticipant participant({domain, "dpc-bench-owner", {}});
   fdds::TypeSupport type(new msg::StokesSamplePubSubType());
   type.register_type(participant.raw());
   fdds::Topic* topic = participant.raw()->create_topic(kOwnedTopic, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
@@ -92,7 +92,7 @@ std::vector<double> RawFailover(const BusBenchmarkHarness& harness, int repetiti
   std::vector<double> gaps_ms;
   const std::string domain = std::to_string(harness.domain);
   for (int r = 0; r < repetitions; ++r) {
-    bus::BusParticipant participant({harness.domain, "dpc-bench-owned-reader"});
+    bus::BusParticipant participant({harness.domain, "dpc-bench-owned-reader", {}});
     fdds::TypeSupport type(new msg::StokesSamplePubSubType());
     type.register_type(participant.raw());
     fdds::Topic* topic = participant.raw()->create_topic(kOwnedTopic, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);

@@ -30,7 +30,7 @@ void WaitForStopSignal() {
 /// A process of a raw reference: each `In` received is answered by `reply`, filled by `fill`.
 template <typename In, typename Out, typename Fill>
 int RunEcho(int domain, const char* name, Out reply, Fill fill) {
-  bus::BusParticipant participant({domain, name});
+  bus::BusParticipant participant({domain, name, {}});
   auto writer = participant.MakeWriter<Out>("");
   auto reader = participant.MakeReader<In>("", [&](const In& in, const auto&) {
     fill(in, &reply);
@@ -93,7 +93,7 @@ std::vector<std::unique_ptr<Process>> StartEchoes(const BusBenchmarkHarness& har
 }
 
 RawReference::RawReference(const BusBenchmarkHarness& harness, int domain, bool chain)
-    : chain_(chain), participant_({domain, chain ? "dpc-bench-chain" : "dpc-bench-ping"}) {
+    : chain_(chain), participant_({domain, chain ? "dpc-bench-chain" : "dpc-bench-ping", {}}) {
   children_ = StartEchoes(harness, domain, chain, "");
   writer_ = participant_.MakeWriter<msg::StokesSample>("");
   reader_ = participant_.MakeReader<msg::WaveplateState>("", [this](const msg::WaveplateState& s, const auto&) {

@@ -20,6 +20,8 @@
 namespace dpc::services {
 namespace {
 
+namespace fdds = eprosima::fastdds::dds;
+
 /// "frozen" for "frozen: no sample for 25 ms", "tracking" for "tracking", …: what a condition is,
 /// without its figures.
 std::string ConditionKind(const std::string& condition) {
@@ -66,13 +68,13 @@ class ControllerService final : public Service {
         command_writer_(participant_.MakeWriter<msg::WaveplateCommand>(bench_id_, options.settings.controller_id)),
         status_writer_(participant_.MakeWriter<msg::ControllerStatus>(bench_id_)) {
     devices_ = participant_.MakeReader<msg::DeviceDescription>(
-        bench_id_, [this](const msg::DeviceDescription& message, const auto&) { OnDevice(message); });
+        bench_id_, [this](const msg::DeviceDescription& message, const auto& info) { OnDevice(message, info); });
     targets_ = participant_.MakeReader<msg::Target>(
-        bench_id_, [this](const msg::Target& message, const auto&) { OnTarget(message); });
+        bench_id_, [this](const msg::Target& message, const auto& info) { OnTarget(message, info); });
     states_ = participant_.MakeReader<msg::WaveplateState>(
-        bench_id_, [this](const msg::WaveplateState& message, const auto&) { OnState(message); });
+        bench_id_, [this](const msg::WaveplateState& message, const auto& info) { OnState(message, info); });
     samples_ = participant_.MakeReader<msg::StokesSample>(
-        bench_id_, [this](const msg::StokesSample& message, const auto&) { OnSample(message); });
+        bench_id_, [this](const msg::StokesSample& message, const auto& info) { OnSample(message, info); });
     spdlog::info("law {}, priority {}, profiles {}, domain {}", MethodName(core_settings_.controller.method),
                  core_settings_.priority, participant_.profiles_file(), common.domain_id);
   }
@@ -118,10 +120,21 @@ class ControllerService final : public Service {
     return core_settings_;
   }
 
-  void OnDevice(const msg::DeviceDescription& message) {
+  /// Whether the writer of a received `what` is the bench's `who` (the bound source of
+  /// `binding`, under mutex_): if not, the message is refused, counted and reported.
+  bool FromBoundSource(SourceBinding* binding, const fdds::SampleInfo& info, const char* what, const char* who) {
+    if (binding->Accept(bus::SourceOf(info), MonotonicNs())) return true;
+    core_.RejectInput(fmt::format("{} from participant {} refused: the bench's {} is {}", what,
+                                  SourceName(binding->last_refused()), who, SourceName(binding->source())));
+    log_.Log(spdlog::level::warn, std::string("foreign ") + what, core_.last_rejection());
+    return false;
+  }
+
+  void OnDevice(const msg::DeviceDescription& message, const fdds::SampleInfo& info) {
     DeviceDescription description;
     const std::string unreadable = bus::ReadDevice(message, &description);
     std::lock_guard<std::mutex> lock(mutex_);
+    if (!FromBoundSource(&driver_source_, info, "device description", "driver")) return;
     if (!unreadable.empty()) {
       core_.OnUnusableDevice(unreadable);
       log_.Log(spdlog::level::err, "unusable device", "unusable device description: " + unreadable);
@@ -133,10 +146,11 @@ class ControllerService final : public Service {
     }
   }
 
-  void OnTarget(const msg::Target& message) {
+  void OnTarget(const msg::Target& message, const fdds::SampleInfo& info) {
     BenchTarget target;
     const std::string unreadable = bus::ReadTarget(message, &target);
     std::lock_guard<std::mutex> lock(mutex_);
+    if (!FromBoundSource(&driver_source_, info, "target", "driver")) return;
     if (!unreadable.empty()) {
       core_.OnUnusableTarget(unreadable);
       log_.Log(spdlog::level::err, "unusable target", "unusable target: " + unreadable);
@@ -147,8 +161,12 @@ class ControllerService final : public Service {
     }
   }
 
-  void OnState(const msg::WaveplateState& message) {
+  void OnState(const msg::WaveplateState& message, const fdds::SampleInfo& info) {
     std::lock_guard<std::mutex> lock(mutex_);
+    if (!FromBoundSource(&driver_source_, info, "state", "driver")) {
+      rejections_.Update(core_.rejected_samples(), core_.last_rejection());
+      return;
+    }
     if (core_.control_count() == 0) return;  // no device yet
     if (std::string reason = bus::ReadState(message, core_.control_count(), &state_); !reason.empty()) {
       core_.RejectInput("state: " + reason);
@@ -158,11 +176,13 @@ class ControllerService final : public Service {
     rejections_.Update(core_.rejected_samples(), core_.last_rejection());
   }
 
-  void OnSample(const msg::StokesSample& message) {
+  void OnSample(const msg::StokesSample& message, const fdds::SampleInfo& info) {
     const int64_t wall_ns = WallClockNs();
     std::lock_guard<std::mutex> lock(mutex_);
     if (std::string reason = bus::ReadSample(message, &sample_); !reason.empty()) {
-      core_.RejectInput(reason);
+      core_.RejectInput(reason);  // malformed, whoever sent it
+    } else if (!FromBoundSource(&sample_source_, info, "sample", "polarimeter")) {
+      // counted and reported
     } else if (const ControllerCommand* command = core_.OnSample(sample_, MonotonicNs(), wall_ns)) {
       bus::WriteCommand(*command, bench_id_, &command_message_);
       command_writer_->Write(command_message_);
@@ -179,6 +199,10 @@ class ControllerService final : public Service {
   BenchSample sample_;
   msg::WaveplateCommand command_message_;  ///< written in place: no allocation per command
   RejectionLog rejections_{"rejected sample or state"};
+  /// Who the device description, the target and the states come from (the driver's participant),
+  /// and the samples (the polarimeter's): SourceBinding. Under mutex_.
+  SourceBinding driver_source_{kSourceReleaseNs};
+  SourceBinding sample_source_{kSourceReleaseNs};
   LogLimiter log_;  ///< under mutex_ (the status loop holds it too)
   bus::BusParticipant participant_;
   std::unique_ptr<bus::Writer<msg::WaveplateCommand>> command_writer_;

@@ -102,7 +102,7 @@ class DriverService final : public Service {
     }
     // The driver's own record of the bench's samples: a command is judged by it (SampleTimeline).
     samples_ = participant_.MakeReader<msg::StokesSample>(
-        bench_id_, [this](const msg::StokesSample& message, const auto&) { OnSample(message); });
+        bench_id_, [this](const msg::StokesSample& message, const fdds::SampleInfo& info) { OnSample(message, info); });
     commands_ = participant_.MakeReader<msg::WaveplateCommand>(
         bench_id_, [this](const msg::WaveplateCommand& message, const fdds::SampleInfo& info) {
           OnCommand(message, participant_.WriterPartition(info.sample_identity.writer_guid()));
@@ -121,6 +121,7 @@ class DriverService final : public Service {
   ~DriverService() override {
     // The readers' callbacks use the core: they go first.
     others_.reset();
+    samples_.reset();
     commands_.reset();
     requests_.reset();
     samples_.reset();
@@ -193,10 +194,19 @@ class DriverService final : public Service {
     }
   }
 
-  void OnSample(const msg::StokesSample& message) {
+  void OnSample(const msg::StokesSample& message, const fdds::SampleInfo& info) {
     BenchSample sample;
     if (!bus::ReadSample(message, &sample).empty()) return;  // the controllers report those
     std::lock_guard<std::mutex> lock(mutex_);
+    // One polarimeter: samples of another participant (numbered near 2⁶⁴, say) would make every
+    // real one look like a new run and every command answer an unknown sample (SourceBinding).
+    if (!sample_source_.Accept(bus::SourceOf(info), MonotonicNs())) {
+      log_.Log(spdlog::level::warn, "foreign sample",
+               fmt::format("samples from participant {} ignored: the bench's polarimeter is {} ({} so far)",
+                           SourceName(sample_source_.last_refused()), SourceName(sample_source_.source()),
+                           sample_source_.refused()));
+      return;
+    }
     if (core_.OnSample(sample.sequence, sample.time_ns, sample.publish_time_ns)) {
       log_.Log(spdlog::level::info, "new run", fmt::format("the bench started a new run (sample {})", sample.sequence));
     }
@@ -278,6 +288,7 @@ class DriverService final : public Service {
   msg::WaveplateState state_message_;  ///< written in place: no allocation per state
   std::string last_reason_;
   RejectionLog rejections_{"rejected command"};
+  SourceBinding sample_source_{kSourceReleaseNs};  ///< the polarimeter's participant; under mutex_
   LogLimiter log_;  ///< under mutex_
   bus::BusParticipant participant_;
   std::unique_ptr<bus::Writer<msg::WaveplateState>> state_writer_;

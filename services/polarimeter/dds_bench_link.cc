@@ -19,9 +19,9 @@ DdsBenchLink::DdsBenchLink(bus::BusParticipant* participant, int control_count, 
       latency_(WallClockNs() + static_cast<int64_t>(latency_warmup_s * 1e9)) {
   writer_ = participant->MakeWriter<msg::StokesSample>(bench_id);
   states_ = participant->MakeReader<msg::WaveplateState>(
-      bench_id, [this](const msg::WaveplateState& state, const auto&) { OnState(state); });
+      bench_id, [this](const msg::WaveplateState& state, const auto& info) { OnState(state, bus::SourceOf(info)); });
   targets_ = participant->MakeReader<msg::Target>(
-      bench_id, [this](const msg::Target& target, const auto&) { OnTarget(target); });
+      bench_id, [this](const msg::Target& target, const auto& info) { OnTarget(target, bus::SourceOf(info)); });
 }
 
 DdsBenchLink::~DdsBenchLink() {
@@ -99,9 +99,21 @@ nlohmann::ordered_json DdsBenchLink::LoopLatencyJson() {
   return latency_.Json();
 }
 
-void DdsBenchLink::OnState(const msg::WaveplateState& message) {
+bool DdsBenchLink::FromDriver(const SourceId& source, const char* what) {
+  if (driver_source_.Accept(source, MonotonicNs())) return true;
+  log_.Log(spdlog::level::warn, std::string("foreign ") + what,
+           fmt::format("{} from participant {} ignored: the bench's driver is {} ({} refused so far)", what,
+                       SourceName(source), SourceName(driver_source_.source()), driver_source_.refused()));
+  return false;
+}
+
+void DdsBenchLink::OnState(const msg::WaveplateState& message, const SourceId& source) {
   const int64_t receive_wall_ns = WallClockNs();
   std::lock_guard<std::mutex> lock(mutex_);
+  if (!FromDriver(source, "state")) {
+    ++rejected_states_;
+    return;
+  }
   if (std::string reason = bus::ReadState(message, control_count_, &state_); !reason.empty()) {
     rejections_.Update(++rejected_states_, reason);
     return;
@@ -117,10 +129,11 @@ void DdsBenchLink::OnState(const msg::WaveplateState& message) {
   }
 }
 
-void DdsBenchLink::OnTarget(const msg::Target& message) {
+void DdsBenchLink::OnTarget(const msg::Target& message, const SourceId& source) {
   BenchTarget target;
   const std::string reason = bus::ReadTarget(message, &target);
   std::lock_guard<std::mutex> lock(mutex_);
+  if (!FromDriver(source, "target")) return;
   if (!reason.empty()) {
     log_.Log(spdlog::level::warn, "rejected target",
              fmt::format("rejected target revision {}: {}", message.revision(), reason));

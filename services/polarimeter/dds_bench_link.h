@@ -42,8 +42,10 @@ class DdsBenchLink final : public BenchLink {
   const bus::ReaderCounters& state_counters() const { return states_->counters(); }
 
  private:
-  void OnState(const msg::WaveplateState& message);
-  void OnTarget(const msg::Target& message);
+  void OnState(const msg::WaveplateState& message, const SourceId& source);
+  void OnTarget(const msg::Target& message, const SourceId& source);
+  /// Whether `source` is the bench's driver (SourceBinding); else logs the refusal. Under mutex_.
+  bool FromDriver(const SourceId& source, const char* what);
 
   std::string bench_id_;
   int control_count_;
@@ -54,6 +56,7 @@ class DdsBenchLink final : public BenchLink {
   std::unique_ptr<bus::Reader<msg::WaveplateState>> states_;
   std::unique_ptr<bus::Reader<msg::Target>> targets_;
   mutable std::mutex mutex_;
+  SourceBinding driver_source_{kSourceReleaseNs};  ///< states and targets: the driver's participant
   std::condition_variable answered_;
   uint64_t awaited_ = 0;
   std::optional<ControlVector> answer_;

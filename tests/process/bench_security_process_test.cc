@@ -195,7 +195,7 @@ TEST_F(BenchSecurityTest, NoOneWithoutTheBenchsCredentialsOrTheRightPermissionIs
 }
 
 TEST_F(BenchSecurityTest, AParticipantWithoutCredentialsSeesNothing) {
-  bus::BusParticipant eavesdropper(bus::BusOptions{48, "dpc-test-eavesdropper"});
+  bus::BusParticipant eavesdropper(bus::BusOptions{48, "dpc-test-eavesdropper", {}});
   auto states = eavesdropper.MakeReader<msg::WaveplateState>("bench1", [](const auto&, const auto&) {});
   auto samples = eavesdropper.MakeReader<msg::StokesSample>("bench1", [](const auto&, const auto&) {});
   std::this_thread::sleep_for(2s);

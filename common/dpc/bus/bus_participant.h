@@ -34,6 +34,7 @@
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
+#include "dpc/bench/source_binding.h"
 #include "dpc/bus/topics.h"
 
 namespace dpc::bus {
@@ -163,6 +164,15 @@ class Reader : public eprosima::fastdds::dds::DataReaderListener {
   eprosima::fastdds::dds::DataReader* reader_ = nullptr;
   eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
 };
+
+/// The participant (GUID prefix) that wrote a received sample: who SourceBinding judges.
+inline SourceId SourceOf(const eprosima::fastdds::dds::SampleInfo& info) {
+  SourceId id{};
+  const auto& prefix = info.sample_identity.writer_guid().guidPrefix.value;
+  static_assert(sizeof(prefix) == std::tuple_size_v<SourceId>);
+  for (size_t i = 0; i < id.size(); ++i) id[i] = prefix[i];
+  return id;
+}
 
 class BusParticipant {
  public:

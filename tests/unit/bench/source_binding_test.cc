@@ -1,0 +1,60 @@
+#include "dpc/bench/source_binding.h"
+
+#include <gtest/gtest.h>
+
+namespace dpc {
+namespace {
+
+constexpr int64_t kMs = 1'000'000;
+
+SourceId Source(uint8_t last) {
+  SourceId id{};
+  id[0] = 0x01;
+  id[11] = last;
+  return id;
+}
+
+TEST(SourceBindingTest, TheFirstSourceIsBoundAndEveryOtherRefusedWhileItTalks) {
+  SourceBinding binding(100 * kMs);
+  EXPECT_FALSE(binding.bound());
+  EXPECT_TRUE(binding.Accept(Source(1), 0));
+  EXPECT_TRUE(binding.bound());
+  EXPECT_EQ(binding.source(), Source(1));
+  for (int64_t t = 5 * kMs; t < 2000 * kMs; t += 5 * kMs) {
+    EXPECT_TRUE(binding.Accept(Source(1), t));
+    EXPECT_FALSE(binding.Accept(Source(2), t + 1)) << t;
+  }
+  EXPECT_EQ(binding.refused(), 399u);
+  EXPECT_EQ(binding.last_refused(), Source(2));
+  EXPECT_EQ(binding.rebinds(), 0u);
+}
+
+TEST(SourceBindingTest, ASilentSourceIsReplacedAfterTheReleaseTimeNotBefore) {
+  SourceBinding binding(100 * kMs);
+  ASSERT_TRUE(binding.Accept(Source(1), 0));
+  EXPECT_FALSE(binding.Accept(Source(2), 100 * kMs));  // exactly the release time: not yet
+  EXPECT_TRUE(binding.Accept(Source(2), 100 * kMs + 1));
+  EXPECT_EQ(binding.source(), Source(2));
+  EXPECT_EQ(binding.rebinds(), 1u);
+  // The old source is now the foreign one.
+  EXPECT_FALSE(binding.Accept(Source(1), 101 * kMs));
+  EXPECT_EQ(binding.refused(), 2u);
+}
+
+TEST(SourceBindingTest, RefusedMessagesDoNotKeepTheBindingAliveNorTakeIt) {
+  SourceBinding binding(100 * kMs);
+  ASSERT_TRUE(binding.Accept(Source(1), 0));
+  // A forger talking all the time does not extend the bound source's silence...
+  for (int64_t t = kMs; t <= 100 * kMs; t += kMs) EXPECT_FALSE(binding.Accept(Source(2), t));
+  // ...and the bound source that speaks again in time keeps its binding.
+  EXPECT_TRUE(binding.Accept(Source(1), 100 * kMs));
+  EXPECT_FALSE(binding.Accept(Source(2), 150 * kMs));
+  EXPECT_EQ(binding.source(), Source(1));
+}
+
+TEST(SourceBindingTest, SourceNamesAreTheGuidPrefixInHex) {
+  EXPECT_EQ(SourceName(Source(0xab)), "01000000.00000000.000000ab");
+}
+
+}  // namespace
+}  // namespace dpc
