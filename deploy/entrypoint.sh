@@ -71,6 +71,7 @@ if [[ "${1:-}" == "make-bench-pki" ]]; then
     # Only what this container needs: nothing left from an earlier run or another identity.
     find "$dir" -mindepth 1 -maxdepth 1 ! -name ca -exec rm -rf {} +
     cp "$out/ca/ca.cert.pem" "$dir/ca/"
+    [[ ! -s "$out/ca/crl.pem" ]] || cp "$out/ca/crl.pem" "$dir/ca/"  # certificates a rotation revoked
     cp "$out/governance.p7s" "$dir/"
     for identity in "$@"; do
       mkdir -p "$dir/$identity"

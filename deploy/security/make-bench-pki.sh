@@ -13,12 +13,15 @@
 # --days N           identity certificates' validity (default 365); the CA gets max(N, 3650)
 # --domains R        DDS domain ids governed and granted: MIN-MAX or one id (default 0-232)
 # --rotate           keep the CA; re-issue every identity key and certificate, rewrite and
-#                    re-sign governance and permissions (each file written aside, then mv'd)
+#                    re-sign governance and permissions (each file written aside, then mv'd);
+#                    the replaced certificates are revoked and DIR/ca/crl.pem (re)written: every
+#                    participant that loads it refuses them (a copied old key is useless)
 # --expired NAME     (re-)issue NAME's certificate and grant already expired (tests); repeatable
 #                    or comma-separated
 #
 # Layout:  DIR/ca/{ca.key.pem,ca.cert.pem}  ECDSA P-256 self-signed CA, identity and permissions CA
 #          DIR/ca/{openssl.cnf,index.txt,serial,newcerts/}  `openssl ca` state (run in DIR/ca)
+#          DIR/ca/crl.pem                    after a --rotate: the revoked certificates (10 years)
 #          DIR/governance.{xml,p7s}          signed by the CA (openssl smime -sign -text)
 #          DIR/<identity>/{key.pem,cert.pem,permissions.xml,permissions.p7s}
 # Identities: driver, polarimeter, controller-<id> for each controller id, operator, observer;
@@ -33,6 +36,7 @@
 #   dds.sec.auth.builtin.PKI-DH.identity_ca                 file://DIR/ca/ca.cert.pem
 #   dds.sec.auth.builtin.PKI-DH.identity_certificate        file://DIR/<identity>/cert.pem
 #   dds.sec.auth.builtin.PKI-DH.private_key                 file://DIR/<identity>/key.pem
+#   dds.sec.auth.builtin.PKI-DH.identity_crl                file://DIR/ca/crl.pem (if it exists)
 #   dds.sec.access.plugin                                   builtin.Access-Permissions
 #   dds.sec.access.builtin.Access-Permissions.permissions_ca  file://DIR/ca/ca.cert.pem
 #   dds.sec.access.builtin.Access-Permissions.governance      file://DIR/governance.p7s
@@ -65,7 +69,7 @@ DATA_PROTECTION=${DPC_DATA_PROTECTION:-ENCRYPT}
 TOPICS="dpc_stokes_sample dpc_waveplate_command dpc_waveplate_state dpc_controller_status
         dpc_device_description dpc_target dpc_target_request dpc_target_reply"
 
-OUT="" BENCH=bench1 CONTROLLERS=main,standby DAYS=365 DOMAINS="" ROTATE=0 EXPIRED=""
+OUT="" BENCH=bench1 CONTROLLERS=main,standby DAYS=365 DOMAINS="" ROTATE=0 EXPIRED="" REVOKED=0
 usage() { awk 'NR > 1 && !/^#/ { exit } NR > 1 { sub(/^# ?/, ""); print }' "${BASH_SOURCE[0]}" >&2; exit 2; }
 die() { echo "make-bench-pki.sh: $*" >&2; exit 2; }
 for kind in RTPS DISCOVERY LIVELINESS METADATA DATA; do
@@ -325,6 +329,15 @@ for name in "${IDENTITIES[@]}"; do
     continue
   fi
   mkdir -p "$dir"
+  if [[ $ROTATE == 1 && -s $dir/cert.pem ]]; then
+    # The certificate replaced is revoked (if this CA issued it and it is not revoked yet).
+    serial=$(openssl x509 -noout -serial -in "$dir/cert.pem" 2>/dev/null || true)
+    serial=${serial#serial=}
+    if [[ -n $serial ]] && awk -F'\t' -v s="$serial" '$1 == "V" && $4 == s { f = 1 } END { exit !f }' "$CA/index.txt"; then
+      ca -revoke "$dir/cert.pem" -crl_reason superseded
+      REVOKED=$((REVOKED + 1))
+    fi
+  fi
   new_key "$dir/.key.pem.new"
   openssl req -new -config "$CA/openssl.cnf" -key "$dir/.key.pem.new" -subj "/O=$ORG/CN=$name" -out "$TMP/$name.csr"
   if [[ $expired == 1 ]]; then
@@ -338,3 +351,9 @@ for name in "${IDENTITIES[@]}"; do
   install_into "$dir" key.pem cert.pem permissions.xml permissions.p7s
   log "issued $name (valid until $(cert_date "$dir/cert.pem" enddate)$([[ $expired == 1 ]] && echo ', EXPIRED'))"
 done
+if [[ $REVOKED -gt 0 ]]; then
+  # Ten years: an expired CRL would make Fast DDS refuse every certificate of the CA.
+  ca -gencrl -crldays 3650 -out "$CA/.crl.pem.new"
+  install_into "$CA" crl.pem
+  log "revoked $REVOKED replaced certificates: $CA/crl.pem"
+fi

@@ -148,11 +148,16 @@ for f in ca.cert.pem ca.key.pem; do
   cmp -s "$GOOD/ca/$f" "$WORK/before-rotation/ca/$f" || { kept_ca=NO; FAILED=1; }
 done
 pair "rotated driver -> rotated observer" data "$GOOD" driver $B "$GOOD" observer $B
-pair "pre-rotation driver -> rotated observer (no CRL)" data "$WORK/before-rotation" driver $B "$GOOD" observer $B
+# The rotation revoked the old certificates: a participant of the old files (which has no CRL
+# yet) is refused by the rotated ones, which load the CRL.
+revoked=yes
+[[ -s $GOOD/ca/crl.pem ]] && [[ $(openssl crl -in "$GOOD/ca/crl.pem" -noout -text | grep -c "Serial Number") -ge 7 ]] ||
+  { revoked=NO; FAILED=1; }
+pair "pre-rotation driver -> rotated observer (revoked)" none "$WORK/before-rotation" driver $B "$GOOD" observer $B
 
 echo
 echo "re-run without --rotate changes nothing: $idem; adding controller spare changed 4 files only: $added"
-echo "--rotate replaced every identity's key (controller-spare too): $rotated; CA kept: $kept_ca"
+echo "--rotate replaced every identity's key (controller-spare too): $rotated; CA kept: $kept_ca; old certificates revoked (crl.pem): $revoked"
 [[ -z ${sniffed:-} ]] || echo "on the wire during the first case (its domain only): $sniffed"
 [[ $KEEP == 0 ]] || echo "kept $WORK"
 exit $FAILED

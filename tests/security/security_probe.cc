@@ -26,6 +26,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -225,6 +226,9 @@ int main(int argc, char** argv) {
     props.emplace_back("dds.sec.access.builtin.Access-Permissions.governance", dir + "governance.p7s");
     props.emplace_back("dds.sec.access.builtin.Access-Permissions.permissions", me + "permissions.p7s");
     props.emplace_back("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
+    if (std::ifstream(options.dir + "/ca/crl.pem").good()) {  // after make-bench-pki.sh --rotate
+      props.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_crl", dir + "ca/crl.pem");
+    }
   }
 
   std::string created = "yes";

@@ -72,7 +72,7 @@ std::vector<std::pair<std::string, std::string>> SecurityProperties(const Securi
   }
   const std::string auth = "dds.sec.auth.builtin.PKI-DH.";
   const std::string access = "dds.sec.access.builtin.Access-Permissions.";
-  return {
+  std::vector<std::pair<std::string, std::string>> properties = {
       {"dds.sec.auth.plugin", "builtin.PKI-DH"},
       {auth + "identity_ca", ca},
       {auth + "identity_certificate", FileUri(mine / "cert.pem")},
@@ -83,6 +83,11 @@ std::vector<std::pair<std::string, std::string>> SecurityProperties(const Securi
       {access + "permissions", FileUri(mine / "permissions.p7s")},
       {"dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC"},
   };
+  // Certificates replaced by a rotation are revoked (make-bench-pki.sh --rotate).
+  if (const auto crl = dir / "ca" / "crl.pem"; std::filesystem::exists(crl)) {
+    properties.emplace_back(auth + "identity_crl", FileUri(crl));
+  }
+  return properties;
 }
 
 /// Keeps the partition of every remote writer discovered (for the driver's identity binding:

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -271,6 +272,50 @@ TEST_F(BusParticipantTest, ForeignKeysInTheBenchsPartitionDoNotCrowdOutANewContr
       },
       2s))
       << "other benches' keys seen: " << reader->counters().other_benches.load();
+}
+
+}  // namespace
+}  // namespace dpc::bus
+
+namespace dpc::bus {
+namespace {
+
+TEST(SecurityPropertiesTest, NameTheBenchFilesAndTheRevocationListOnceARotationWroteIt) {
+  EXPECT_TRUE(SecurityProperties({}).empty());
+  const std::filesystem::path dir =
+      std::filesystem::path(::testing::TempDir()) / ("dpc_security_properties_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir / "ca");
+  std::filesystem::create_directories(dir / "driver");
+  auto value = [](const auto& properties, const std::string& name) -> std::optional<std::string> {
+    for (const auto& [n, v] : properties) {
+      if (n == name) return v;
+    }
+    return std::nullopt;
+  };
+  const std::string crl_property = "dds.sec.auth.builtin.PKI-DH.identity_crl";
+  // (Only their presence matters here: Fast DDS reads them.)
+  for (const char* file : {"ca/ca.cert.pem", "governance.p7s", "driver/cert.pem", "driver/key.pem"}) {
+    std::ofstream(dir / file) << "-\n";
+  }
+  try {
+    SecurityProperties({dir.string(), "driver"});
+    ADD_FAILURE() << "a missing permissions file was not noticed";
+  } catch (const BusError& e) {
+    EXPECT_NE(std::string(e.what()).find("permissions.p7s is missing"), std::string::npos) << e.what();
+  }
+  std::ofstream(dir / "driver" / "permissions.p7s") << "-\n";
+  const auto before = SecurityProperties({dir.string(), "driver"});
+  EXPECT_EQ(value(before, "dds.sec.auth.builtin.PKI-DH.identity_certificate"),
+            "file://" + (dir / "driver" / "cert.pem").string());
+  EXPECT_EQ(value(before, "dds.sec.access.builtin.Access-Permissions.governance"),
+            "file://" + (dir / "governance.p7s").string());
+  EXPECT_FALSE(value(before, crl_property).has_value()) << "no CRL before any rotation";
+  { std::ofstream(dir / "ca" / "crl.pem") << "-----BEGIN X509 CRL-----\n"; }
+  EXPECT_EQ(value(SecurityProperties({dir.string(), "driver"}), crl_property),
+            "file://" + (dir / "ca" / "crl.pem").string());
+  EXPECT_THROW(SecurityProperties({dir.string(), "operator"}), BusError);  // no such identity here
+  EXPECT_THROW(SecurityProperties({dir.string(), "../driver"}), BusError);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
