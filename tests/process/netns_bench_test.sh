@@ -11,8 +11,12 @@
 #              unicast locators on the veth address, no multicast locators.
 # CASE server: a Fast DDS discovery server (fast-discovery-server -x) bound to A's veth address;
 #              every service is a CLIENT of it (no multicast, no initial peers).
+# CASE secure_peers: peers, with DDS Security (Fast DDS 2.9 has no secure discovery server):
+#              a bench PKI made by deploy/security/make-bench-pki.sh for this domain, every
+#              service with --security-dir (its role's identity); afterwards a participant of B
+#              without credentials must see nothing of the bench.
 # Asserts from the polarimeter's JSON summary (real time, 2 kHz, 6 s) that the loop locked
-# (first_lock_time_s), the median error after lock is below 2° and the mean below 10° (see below); prints the time the
+# (first_lock_time_s), the median error after lock is below 2° (secure: 3°) and the mean below 10° (see below); prints the time the
 # controller needed to receive the device description across the namespaces (discovery +
 # TRANSIENT_LOCAL delivery). DPC_NETNS_RATE_HZ overrides the polarimeter's rate (2000).
 #
@@ -21,7 +25,7 @@
 set -euo pipefail
 
 if [[ $# -ne 5 ]]; then
-  echo "usage: $0 peers|server DPC_DRIVER DPC_CONTROLLER DPC_POLARIMETER LOOPBACK_XML" >&2
+  echo "usage: $0 peers|server|secure_peers DPC_DRIVER DPC_CONTROLLER DPC_POLARIMETER LOOPBACK_XML" >&2
   exit 2
 fi
 CASE=$1
@@ -29,7 +33,7 @@ DRIVER=$2
 CONTROLLER=$3
 POLARIMETER=$4
 LOOPBACK_XML=$5
-case $CASE in peers|server) ;; *) echo "unknown case $CASE" >&2; exit 2 ;; esac
+case $CASE in peers|server|secure_peers) ;; *) echo "unknown case $CASE" >&2; exit 2 ;; esac
 
 skip() { echo "SKIP: $*"; exit 77; }
 [[ $(id -u) -eq 0 ]] || skip "needs root (network namespaces)"
@@ -53,6 +57,7 @@ ADDR_B="10.99.$X.2"
 DOMAIN=62
 RATE_HZ=${DPC_NETNS_RATE_HZ:-2000}
 [[ $CASE == server ]] && DOMAIN=63
+[[ $CASE == secure_peers ]] && DOMAIN=60
 SERVER_PORT=11811
 WORK=$(mktemp -d /tmp/dpc-netns.XXXXXX)
 PIDS=()
@@ -108,7 +113,7 @@ echo "namespaces $NS_A ($ADDR_A) and $NS_B ($ADDR_B), case $CASE, domain $DOMAIN
 # the bench's; only the transport (UDPv4 on the veth address) and discovery differ.
 MAKE_PROFILE="$(dirname "$LOOPBACK_XML")/make_profile.sh"
 [[ -x $MAKE_PROFILE ]] || fail "$MAKE_PROFILE missing"
-if [[ $CASE == peers ]]; then
+if [[ $CASE == peers || $CASE == secure_peers ]]; then
   "$MAKE_PROFILE" --topics-from "$LOOPBACK_XML" --address "$ADDR_A" --peers "$ADDR_B" >"$WORK/profile_a.xml"
   "$MAKE_PROFILE" --topics-from "$LOOPBACK_XML" --address "$ADDR_B" --peers "$ADDR_A" >"$WORK/profile_b.xml"
 else
@@ -124,6 +129,15 @@ for f in "$WORK"/profile_[ab].xml; do
   # No multicast anywhere: discovery must not depend on it.
   ! grep -q -i multicast "$f" || fail "$f mentions multicast"
 done
+
+# --- DDS Security (case secure_peers) -----------------------------------------------------------
+SECURITY=()
+if [[ $CASE == secure_peers ]]; then
+  PKI_SCRIPT="$(dirname "$LOOPBACK_XML")/../security/make-bench-pki.sh"
+  "$PKI_SCRIPT" --out "$WORK/pki" --bench bench1 --controllers remote --domains "$DOMAIN" 2>"$WORK/pki.log" ||
+    fail "make-bench-pki.sh failed: $(tail -n 5 "$WORK/pki.log")"
+  SECURITY=(--security-dir "$WORK/pki")
+fi
 
 # run_in NS PROFILE LOG CMD...: a service in a namespace, in the background; its PID is recorded.
 run_in() {
@@ -161,9 +175,9 @@ if [[ $CASE == server ]]; then
 fi
 
 # --- the bench: driver in A, controller in B, then the polarimeter in A ------------------------
-run_in "$NS_A" "$WORK/profile_a.xml" "$WORK/driver.log" "$DRIVER" --domain "$DOMAIN" --device-record "$WORK/driver.record"
+run_in "$NS_A" "$WORK/profile_a.xml" "$WORK/driver.log" "$DRIVER" --domain "$DOMAIN" --device-record "$WORK/driver.record" "${SECURITY[@]}"
 t0=$(date +%s%N)
-run_in "$NS_B" "$WORK/profile_b.xml" "$WORK/controller.log" "$CONTROLLER" --domain "$DOMAIN" --id remote
+run_in "$NS_B" "$WORK/profile_b.xml" "$WORK/controller.log" "$CONTROLLER" --domain "$DOMAIN" --id remote "${SECURITY[@]}"
 wait_for 30 "the controller (namespace B) to receive the device description from the driver (A)" \
   grep -q "device: 3 stages" "$WORK/controller.log"
 discovery_ms=$(( ($(date +%s%N) - t0) / 1000000 ))
@@ -174,8 +188,13 @@ for ns in "$NS_A" "$NS_B"; do
   echo "UDP sockets in $ns: $(ip netns exec "$ns" ss -Hunl | awk '{ print $4 }' | sort -u | tr '\n' ' ')"
 done
 
+if [[ $CASE == secure_peers ]]; then
+  # A controller in B without credentials, for the whole run: never matched, it learns nothing.
+  run_in "$NS_B" "$WORK/profile_b.xml" "$WORK/intruder.log" "$CONTROLLER" --domain "$DOMAIN" --id intruder --priority 100
+fi
+
 ip netns exec "$NS_A" env FASTRTPS_DEFAULT_PROFILES_FILE="$WORK/profile_a.xml" \
-  "$POLARIMETER" --domain "$DOMAIN" --rate-hz "$RATE_HZ" --run-s 6 --json \
+  "$POLARIMETER" --domain "$DOMAIN" --rate-hz "$RATE_HZ" --run-s 6 --json "${SECURITY[@]}" \
   >"$WORK/polarimeter.json" 2>"$WORK/polarimeter.log" &
 POL_PID=$!
 PIDS+=("$POL_PID")
@@ -186,6 +205,13 @@ for pid in "${PIDS[@]}"; do
   [[ $pid == "$POL_PID" ]] && continue
   kill -0 "$pid" 2>/dev/null || fail "a service (PID $pid) exited early"
 done
+
+if [[ $CASE == secure_peers ]]; then
+  ! grep -q "device:" "$WORK/intruder.log" || fail "a controller without credentials got the device description"
+  grep -q "waiting for the device description" "$WORK/intruder.log" ||
+    fail "the controller without credentials did not run: $(tail -n 5 "$WORK/intruder.log")"
+  echo "a controller without credentials in $NS_B saw nothing of the secure bench during the run"
+fi
 
 echo "$SUMMARY" | jq -c '{lock_time_s, first_lock_time_s, error_deg, bench: .bench}'
 # lock_time_s: from when the error stays below 10° to the end; unset if the last sample is above.
@@ -199,8 +225,12 @@ fi
 # below 2°: the loop holds the target most of the time. The mean is bounded loosely (10°): on this
 # shared 2-core machine a process starved for 100 ms lets the scrambler move the light by 2 rad,
 # which adds a few degrees to the mean without anything wrong on the network.
-echo "$SUMMARY" | jq -e '.error_deg.p50 != null and .error_deg.p50 < 2' >/dev/null ||
-  fail "median error after lock is not below 2°: $(echo "$SUMMARY" | jq -c .error_deg)"
+# Secured, every message is signed and encrypted: the loop latency grows by about half (README,
+# dpc_bus_benchmark --only security) and so does the error while locked: its median bound is 3°.
+P50_LIMIT_DEG=2
+[[ $CASE == secure_peers ]] && P50_LIMIT_DEG=3
+echo "$SUMMARY" | jq -e --argjson limit "$P50_LIMIT_DEG" '.error_deg.p50 != null and .error_deg.p50 < $limit' >/dev/null ||
+  fail "median error after lock is not below ${P50_LIMIT_DEG}°: $(echo "$SUMMARY" | jq -c .error_deg)"
 echo "$SUMMARY" | jq -e '.error_deg.mean != null and .error_deg.mean < 10' >/dev/null ||
   fail "mean error after lock is not below 10°: $(echo "$SUMMARY" | jq -c .error_deg)"
 if ! echo "$SUMMARY" | jq -e '.error_deg.mean < 2' >/dev/null; then
