@@ -17,8 +17,9 @@ Steps (each prints what it saw; the figures at the end are the issue's closing f
   5. `docker network disconnect` of the solver for longer than the deadlines: the driver holds
      and says why; reconnect: control resumes from the held φ, without a jump.
   6. `down` leaves no container, network or volume of the project.
-  7. Split deployment: the bench (with its discovery server) and the solver as two compose
-     projects; the solver's controller locks the bench's output.
+  7. Split deployment: the bench and the solver as two compose projects, secured (fixed peers,
+     the solver with the bench's controller-remote identity), then open through the bench's
+     discovery server; each time the solver's controller locks the bench's output.
 Every container network is internal with a subnet in 10.99.0.0/16; host-side participants are
 whitelisted to the bridge's gateway only.
 """
@@ -218,39 +219,66 @@ def failover_and_hold(args, base, work):
     return figures
 
 
-def split_deployment(args, base, work):
-    # Through a discovery server, which Fast DDS 2.9 cannot secure: an open bench.
-    os.environ.pop("DPC_SECURITY_DIR", None)
+def split_deployment(args, base, work, secure):
+    """The bench and the solver as two compose projects. Secure: fixed peers and DDS Security, the
+    solver with the bench's controller-remote identity. Open: through the bench's discovery server
+    (which Fast DDS 2.9 cannot secure)."""
+    kind = "secure peers" if secure else "discovery server"
     figures = {}
+    pki = os.path.join(work, "pki-split")
     common = {"DPC_NET_PREFIX": SPLIT_PREFIX, "DPC_IMAGE": IMAGE, "DPC_DOMAIN": DOMAIN, "DPC_BENCH_ID": BENCH_ID,
-              "DPC_RATE_HZ": str(args.rate_hz), "DPC_SCRAMBLER_RAD_PER_S": str(args.scrambler_rad_per_s)}
-    bench_project = Project(base, "dpcsystestbench", ["docker-compose.yml", "deploy/compose/discovery-server.yml"], common)
-    solver_project = Project(base, "dpcsystestsolver", ["deploy/compose/solver.yml"], dict(
-        common, DPC_LAB_NETWORK=f"dpcsystestbench_bench", DPC_SOLVER_ADDRESS=f"{SPLIT_PREFIX}.40",
-        DPC_DDS_SERVER=f"{SPLIT_PREFIX}.2:11811"))
+              "DPC_RATE_HZ": str(args.rate_hz), "DPC_SCRAMBLER_RAD_PER_S": str(args.scrambler_rad_per_s),
+              "DPC_PKI_DIR": pki}
+    if secure:
+        bench_project = Project(base, "dpcsystestbench", ["docker-compose.yml"], common)
+        solver_project = Project(base, "dpcsystestsolver", ["deploy/compose/solver.yml"], dict(
+            common, DPC_LAB_NETWORK="dpcsystestbench_bench", DPC_SOLVER_ADDRESS=f"{SPLIT_PREFIX}.40",
+            DPC_DDS_PEERS=f"{SPLIT_PREFIX}.10,{SPLIT_PREFIX}.11",
+            DPC_SOLVER_PKI=os.path.join(pki, "bench", "controller-remote")))
+        bench_services = ["pki", "driver", "polarimeter"]
+        os.environ["DPC_SECURITY_DIR"] = os.path.join(pki, "bench", "tools")  # the host's tools: the observer
+    else:
+        bench_project = Project(base, "dpcsystestbench", ["docker-compose.yml", "deploy/compose/discovery-server.yml"],
+                                common)
+        solver_project = Project(base, "dpcsystestsolver", ["deploy/compose/solver.yml"], dict(
+            common, DPC_LAB_NETWORK="dpcsystestbench_bench", DPC_SOLVER_ADDRESS=f"{SPLIT_PREFIX}.40",
+            DPC_DDS_SERVER=f"{SPLIT_PREFIX}.2:11811", DPC_SECURITY="off",
+            DPC_SOLVER_PKI=os.path.join(pki, "bench", "controller-remote")))  # unused: nothing in the repo
+        bench_services = ["discovery", "driver", "polarimeter"]
+        os.environ.pop("DPC_SECURITY_DIR", None)
     solver_project.down()
     bench_project.down()
     bench = None
+    key = "split_secure" if secure else "split"
     try:
-        log("split: the bench project (discovery server, driver, polarimeter), no controller")
-        bench_project("up", "-d", "discovery", "driver", "polarimeter", timeout=300)
-        bench = Bench(args.dpc, host_profile(SPLIT_PREFIX, True, work))
+        log(f"split ({kind}): the bench project ({', '.join(bench_services)}), no controller")
+        bench_project("up", "-d", *bench_services, timeout=300)
+        if secure:
+            ready = os.path.join(pki, "bench", "tools", "ready")
+            deadline = time.monotonic() + 60
+            while not os.path.exists(ready) and time.monotonic() < deadline:
+                time.sleep(0.2)
+            expect(os.path.exists(os.path.join(pki, "bench", "controller-remote", "ready")),
+                   "the bench's pki service issued the solver's identity (controller-remote)")
+        bench = Bench(args.dpc, host_profile(SPLIT_PREFIX, not secure, work))
         bench.wait(lambda: (bench.latest_state() or {}).get("mode") == "DRIVER_HOLDING", 60,
                    "the driver to report (holding, no controller)")
-        log("split: the solver project (one controller, client of the bench's discovery server)")
+        log(f"split ({kind}): the solver project (one controller)")
         up_started = time.monotonic()
         solver_project("up", "-d", timeout=300)
         bench.wait(lambda: bench.locked_since(up_started) is not None, 90, "the solver to lock the output")
-        figures["split_up_to_locked_s"] = bench.locked_since(up_started) - up_started
+        figures[f"{key}_up_to_locked_s"] = bench.locked_since(up_started) - up_started
         bench.wait(lambda: bench.latest_state() is not None, 20, "the driver's state")
         state = bench.latest_state()
         expect(state["obeyed_controller_id"] == "remote",
-               f"the bench obeys the solver's controller, locked {figures['split_up_to_locked_s']:.2f} s after its `up`")
+               f"the bench obeys the solver's controller ({kind}), locked "
+               f"{figures[f'{key}_up_to_locked_s']:.2f} s after its `up`")
         down_started = time.monotonic()
         solver_project("down", "-t", "10")
         bench_project("down", "-t", "10")
-        figures["split_down_s"] = time.monotonic() - down_started
-        expect(figures["split_down_s"] < 16, f"both projects went down without kill timeouts ({figures['split_down_s']:.2f} s)")
+        figures[f"{key}_down_s"] = time.monotonic() - down_started
+        expect(figures[f"{key}_down_s"] < 16,
+               f"both projects went down without kill timeouts ({figures[f'{key}_down_s']:.2f} s)")
     finally:
         if bench:
             bench.stop()
@@ -293,7 +321,8 @@ def main():
         run([os.path.join(REPO, "deploy", "make-base-image.sh")], capture=False, timeout=1200)
         figures = failover_and_hold(args, base, work)
         if not args.skip_split:
-            figures.update(split_deployment(args, base, work))
+            figures.update(split_deployment(args, base, work, secure=True))
+            figures.update(split_deployment(args, base, work, secure=False))
         print("FIGURES " + json.dumps({k: round(v, 3) for k, v in figures.items()}), flush=True)
         return 0
     except (Failure, RuntimeError, subprocess.TimeoutExpired) as error:
