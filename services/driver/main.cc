@@ -6,12 +6,14 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <memory>
 #include <mutex>
 
 #include <fmt/ostream.h>
 #include <spdlog/spdlog.h>
 
+#include "dpc/bench/bench_messages.h"
 #include "dpc/bench/clock.h"
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/message_conversion.h"
@@ -95,6 +97,7 @@ class DriverService final : public Service {
                           options.settings.max_ramp_s},
         bench_id_));
     targets_revision_ = targets_.current().revision;
+    first_target_ns_ = WallClockNs();  // (the source timestamp the other drivers see, near enough)
     target_writer_->Write(bus::TargetMessage(targets_.current(), bench_id_));
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -240,12 +243,24 @@ class DriverService final : public Service {
     if (writer.guidPrefix == own.guidPrefix) return;
     const uint64_t mine = EpochOf(targets_revision_.load());
     const uint64_t theirs = EpochOf(message.revision());
-    const bool i_am_later = mine > theirs || (mine == theirs && writer.guidPrefix < own.guidPrefix);
+    // Who started first: the epochs (whole seconds); within the same second, the write times of
+    // both drivers' first targets (each writes its revision 1 as it starts); the participant
+    // GUIDs only if one of them already changed its target.
+    double started_before_s = static_cast<double>(mine) - static_cast<double>(theirs);
+    bool i_am_later = mine > theirs;
+    if (mine == theirs) {
+      if (RevisionCount(message.revision()) == 1) {
+        started_before_s = static_cast<double>(first_target_ns_ - info.source_timestamp.to_ns()) * 1e-9;
+        i_am_later = started_before_s > 0.0 || (started_before_s == 0.0 && writer.guidPrefix < own.guidPrefix);
+      } else {
+        i_am_later = writer.guidPrefix < own.guidPrefix;
+      }
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     log_.Log(spdlog::level::err, "second driver",
-             fmt::format("a second driver on bench {} (participant {}, started {} s {} this one)", bench_id_,
-                         fmt::streamed(writer.guidPrefix), mine > theirs ? mine - theirs : theirs - mine,
-                         mine >= theirs ? "before" : "after"));
+             fmt::format("a second driver on bench {} (participant {}, started {:.3g} s {} this one)", bench_id_,
+                         fmt::streamed(writer.guidPrefix), std::abs(started_before_s),
+                         i_am_later ? "before" : "after"));
     if (i_am_later && !displaced_.exchange(true)) stop();
   }
 
@@ -300,6 +315,7 @@ class DriverService final : public Service {
   std::unique_ptr<bus::Reader<msg::TargetRequest>> requests_;
   std::unique_ptr<bus::Reader<msg::Target>> others_;  ///< other drivers' targets
   std::atomic<uint64_t> targets_revision_{0};  ///< the first revision this driver published
+  int64_t first_target_ns_ = 0;  ///< wall clock when it was written (set before any reader exists)
   std::atomic<bool> displaced_{false};
 };
 

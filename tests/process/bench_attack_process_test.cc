@@ -28,8 +28,10 @@ using dpc::testing::Process;
 using namespace std::chrono_literals;
 
 constexpr uint64_t kMaxU64 = std::numeric_limits<uint64_t>::max();
-// Locked at 1 kHz, the default bench's largest error over a second is 12–18°; an attack that
-// took hold (a forged target, device or sample stream adopted) gave 79–90° (the attack table).
+// Locked at 1 kHz, the default bench's largest error over a second is 12–18° and its median a
+// few degrees; an attack that took hold (a forged target, device, state or sample stream
+// adopted) gave 79–144°. The median is judged: a stall of the whole machine (the scrambler
+// turns 20 rad/s meanwhile) moves the largest error, not the median.
 constexpr double kAttackedErrorDeg = 30.0;
 
 class BenchAttackTest : public dpc::testing::BenchFixture {
@@ -43,11 +45,25 @@ class BenchAttackTest : public dpc::testing::BenchFixture {
     ASSERT_TRUE(Eventually([&] { return AppliedBy("A") > 500; }, 20s)) << Logs();
   }
 
-  /// The largest output error over the `window` after now, once it has passed.
-  double MaxErrorOver(std::chrono::milliseconds window) {
+  struct ErrorStats {
+    double median_deg;
+    double max_deg;
+  };
+  ErrorStats ErrorBetween(int64_t from_ns, int64_t to_ns) {
+    return {MedianErrorDeg(from_ns, to_ns), MaxErrorDeg(from_ns, to_ns)};
+  }
+  /// The output error over the `window` after now, once it has passed.
+  ErrorStats ErrorOver(std::chrono::milliseconds window) {
     const int64_t from = WallClockNs();
     std::this_thread::sleep_for(window);
-    return MaxErrorDeg(from, WallClockNs());
+    return ErrorBetween(from, WallClockNs());
+  }
+  /// Prints the error before and after (or during) an attack; expects the median after below
+  /// kAttackedErrorDeg.
+  static void ExpectUnmoved(const char* what, ErrorStats before, ErrorStats after) {
+    std::printf("error median / max: %.2f° / %.2f° before, %.2f° / %.2f° %s\n", before.median_deg,
+                before.max_deg, after.median_deg, after.max_deg, what);
+    EXPECT_LT(after.median_deg, kAttackedErrorDeg) << what;
   }
 
   /// The loop still runs: A obeyed, more of its commands applied, states still coming.
@@ -107,7 +123,7 @@ class BenchAttackTest : public dpc::testing::BenchFixture {
 
 TEST_F(BenchAttackTest, AForgedTargetWithTheLastRevisionIsIgnoredAndTheNextRealRequestObeyed) {
   StartLockedBench(50);
-  const double before_deg = MaxErrorOver(1000ms);
+  const ErrorStats before = ErrorOver(1000ms);
   // Revision 2⁶⁴−1, a target 90° away: adopted, it would lock every later revision out.
   auto targets = participant_->MakeWriter<msg::Target>("bench1");
   msg::Target forged;
@@ -124,9 +140,7 @@ TEST_F(BenchAttackTest, AForgedTargetWithTheLastRevisionIsIgnoredAndTheNextRealR
       },
       5s))
       << Logs();
-  const double after_deg = MaxErrorOver(1000ms);
-  std::printf("error: %.2f° before, %.2f° in the second after the forged target\n", before_deg, after_deg);
-  EXPECT_LT(after_deg, std::max(kAttackedErrorDeg, 2.0 * before_deg));
+  ExpectUnmoved("in the second after the forged target", before, ErrorOver(1000ms));
   ExpectStillLockedByA();
   // The polarimeter said so too.
   EXPECT_NE(Logs().find("target from participant"), std::string::npos);
@@ -150,7 +164,7 @@ TEST_F(BenchAttackTest, AForgedDeviceDescriptionIsIgnored) {
     stage.control_map().rad_per_unit(1.0);
   }
   forged.driver_id("driver");
-  const double before_deg = MaxErrorOver(1000ms);
+  const ErrorStats before = ErrorOver(1000ms);
   auto devices = participant_->MakeWriter<msg::DeviceDescription>("bench1");
   ASSERT_TRUE(Eventually([&] { return devices->matched_readers() >= 1; }, 10s));
   devices->Write(forged);
@@ -162,15 +176,13 @@ TEST_F(BenchAttackTest, AForgedDeviceDescriptionIsIgnored) {
       },
       5s))
       << Logs();
-  const double after_deg = MaxErrorOver(1000ms);
-  std::printf("error: %.2f° before, %.2f° in the second after the forged description\n", before_deg, after_deg);
-  EXPECT_LT(after_deg, std::max(kAttackedErrorDeg, 2.0 * before_deg));
+  ExpectUnmoved("in the second after the forged description", before, ErrorOver(1000ms));
   ExpectStillLockedByA();
 }
 
 TEST_F(BenchAttackTest, SamplesNumberedNearTwoToTheSixtyFourDoNotDisplaceTheRealOnes) {
   StartLockedBench(52);
-  const double before_deg = MaxErrorOver(1000ms);
+  const ErrorStats before = ErrorOver(1000ms);
   auto samples = participant_->MakeWriter<msg::StokesSample>("bench1");
   ASSERT_TRUE(Eventually([&] { return samples->matched_readers() >= 2; }, 10s));
   // 50 Hz for 1 s, valid unit vectors: only their writer and their numbers are wrong. (Their
@@ -187,9 +199,7 @@ TEST_F(BenchAttackTest, SamplesNumberedNearTwoToTheSixtyFourDoNotDisplaceTheReal
     samples->Write(s);
     std::this_thread::sleep_for(20ms);
   }
-  const double during_deg = MaxErrorDeg(from, WallClockNs());
-  std::printf("error: %.2f° before, %.2f° during the forged samples\n", before_deg, during_deg);
-  EXPECT_LT(during_deg, std::max(kAttackedErrorDeg, 2.0 * before_deg));
+  ExpectUnmoved("during the forged samples", before, ErrorBetween(from, WallClockNs()));
   const auto status = Status("A");
   ASSERT_TRUE(status.has_value());
   EXPECT_NE(status->last_rejection().to_string().find("sample from participant"), std::string::npos)
@@ -200,7 +210,7 @@ TEST_F(BenchAttackTest, SamplesNumberedNearTwoToTheSixtyFourDoNotDisplaceTheReal
 
 TEST_F(BenchAttackTest, ForgedStatesAtTwoHundredHertzAlsoWithAnInvalidModeDoNotResyncTheController) {
   StartLockedBench(53);
-  const double before_deg = MaxErrorOver(1000ms);
+  const ErrorStats before = ErrorOver(1000ms);
   auto states = participant_->MakeWriter<msg::WaveplateState>("bench1");
   ASSERT_TRUE(Eventually([&] { return states->matched_readers() >= 2; }, 10s));
   const int64_t from = WallClockNs();
@@ -214,9 +224,7 @@ TEST_F(BenchAttackTest, ForgedStatesAtTwoHundredHertzAlsoWithAnInvalidModeDoNotR
     states->Write(forged);
     std::this_thread::sleep_for(5ms);
   }
-  const double during_deg = MaxErrorDeg(from, WallClockNs());
-  std::printf("error: %.2f° before, %.2f° during the forged states\n", before_deg, during_deg);
-  EXPECT_LT(during_deg, std::max(kAttackedErrorDeg, 2.0 * before_deg));
+  ExpectUnmoved("during the forged states", before, ErrorBetween(from, WallClockNs()));
   const auto status = Status("A");
   ASSERT_TRUE(status.has_value());
   EXPECT_NE(status->last_rejection().to_string().find("state from participant"), std::string::npos)
@@ -264,7 +272,7 @@ TEST_F(BenchAttackTest, HugeRatesForATenthOfASecondAreBoundedByTheDevice) {
   ExpectBounded(first, 1e5, 2e-3);
   // Control comes back to A once the intruder is silent, and the loop locks again.
   ASSERT_TRUE(SoonObeys("A", 10s)) << LatestState()->reason().to_string();
-  EXPECT_TRUE(Eventually([&] { return MaxErrorOver(1000ms) < kAttackedErrorDeg; }, 20s)) << "not locked again";
+  EXPECT_TRUE(Eventually([&] { return ErrorOver(1000ms).median_deg < kAttackedErrorDeg; }, 20s)) << "not locked again";
   ExpectDriverExitsCleanly();
 }
 

@@ -129,6 +129,20 @@ class BenchFixture : public ::testing::Test {
     }
     return worst;
   }
+  /// The median output error of the samples published in [from_ns, to_ns] (wall clock); NaN if
+  /// none. Unlike the largest, a stall of the whole machine does not move it.
+  double MedianErrorDeg(int64_t from_ns, int64_t to_ns) {
+    std::vector<double> errors;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (const auto& [t, e] : sample_errors_) {
+        if (t >= from_ns && t <= to_ns) errors.push_back(e);
+      }
+    }
+    if (errors.empty()) return NAN;
+    std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+    return errors[errors.size() / 2];
+  }
   /// Applied states obeying `id` seen so far.
   size_t AppliedBy(const std::string& id) {
     std::lock_guard<std::mutex> lock(mutex_);
