@@ -124,8 +124,7 @@ class ControllerService final : public Service {
   /// `binding`, under mutex_): if not, the message is refused, counted and reported.
   bool FromBoundSource(SourceBinding* binding, const fdds::SampleInfo& info, const char* what, const char* who) {
     if (binding->Accept(bus::SourceOf(info), MonotonicNs())) return true;
-    core_.RejectInput(fmt::format("{} from participant {} refused: the bench's {} is {}", what,
-                                  SourceName(binding->last_refused()), who, SourceName(binding->source())));
+    core_.RejectInput(binding->Refusal(what, who));
     log_.Log(spdlog::level::warn, std::string("foreign ") + what, core_.last_rejection());
     return false;
   }

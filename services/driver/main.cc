@@ -124,7 +124,6 @@ class DriverService final : public Service {
   ~DriverService() override {
     // The readers' callbacks use the core: they go first.
     others_.reset();
-    samples_.reset();
     commands_.reset();
     requests_.reset();
     samples_.reset();
@@ -204,10 +203,7 @@ class DriverService final : public Service {
     // One polarimeter: samples of another participant (numbered near 2⁶⁴, say) would make every
     // real one look like a new run and every command answer an unknown sample (SourceBinding).
     if (!sample_source_.Accept(bus::SourceOf(info), MonotonicNs())) {
-      log_.Log(spdlog::level::warn, "foreign sample",
-               fmt::format("samples from participant {} ignored: the bench's polarimeter is {} ({} so far)",
-                           SourceName(sample_source_.last_refused()), SourceName(sample_source_.source()),
-                           sample_source_.refused()));
+      log_.Log(spdlog::level::warn, "foreign sample", sample_source_.Refusal("sample", "polarimeter"));
       return;
     }
     if (core_.OnSample(sample.sequence, sample.time_ns, sample.publish_time_ns)) {

@@ -101,9 +101,7 @@ nlohmann::ordered_json DdsBenchLink::LoopLatencyJson() {
 
 bool DdsBenchLink::FromDriver(const SourceId& source, const char* what) {
   if (driver_source_.Accept(source, MonotonicNs())) return true;
-  log_.Log(spdlog::level::warn, std::string("foreign ") + what,
-           fmt::format("{} from participant {} ignored: the bench's driver is {} ({} refused so far)", what,
-                       SourceName(source), SourceName(driver_source_.source()), driver_source_.refused()));
+  log_.Log(spdlog::level::warn, std::string("foreign ") + what, driver_source_.Refusal(what, "driver"));
   return false;
 }
 

@@ -205,7 +205,7 @@ TEST_F(BenchAttackTest, SamplesNumberedNearTwoToTheSixtyFourDoNotDisplaceTheReal
   EXPECT_NE(status->last_rejection().to_string().find("sample from participant"), std::string::npos)
       << status->last_rejection().to_string();
   ExpectStillLockedByA();
-  EXPECT_NE(Logs().find("samples from participant"), std::string::npos) << "the driver did not report them";
+  EXPECT_NE(driver_->Log().find("sample from participant"), std::string::npos) << "the driver did not report them";
 }
 
 TEST_F(BenchAttackTest, ForgedStatesAtTwoHundredHertzAlsoWithAnInvalidModeDoNotResyncTheController) {

@@ -122,26 +122,25 @@ class BenchFixture : public ::testing::Test {
   }
   /// The largest output error of the samples published in [from_ns, to_ns] (wall clock).
   double MaxErrorDeg(int64_t from_ns, int64_t to_ns) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    double worst = 0.0;
-    for (const auto& [t, e] : sample_errors_) {
-      if (t >= from_ns && t <= to_ns) worst = std::max(worst, e);
-    }
-    return worst;
+    const std::vector<double> errors = ErrorsDeg(from_ns, to_ns);
+    return errors.empty() ? 0.0 : *std::max_element(errors.begin(), errors.end());
   }
   /// The median output error of the samples published in [from_ns, to_ns] (wall clock); NaN if
   /// none. Unlike the largest, a stall of the whole machine does not move it.
   double MedianErrorDeg(int64_t from_ns, int64_t to_ns) {
-    std::vector<double> errors;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      for (const auto& [t, e] : sample_errors_) {
-        if (t >= from_ns && t <= to_ns) errors.push_back(e);
-      }
-    }
+    std::vector<double> errors = ErrorsDeg(from_ns, to_ns);
     if (errors.empty()) return NAN;
     std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
     return errors[errors.size() / 2];
+  }
+  /// The output errors of the samples published in [from_ns, to_ns] (wall clock).
+  std::vector<double> ErrorsDeg(int64_t from_ns, int64_t to_ns) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::vector<double> errors;
+    for (const auto& [t, e] : sample_errors_) {
+      if (t >= from_ns && t <= to_ns) errors.push_back(e);
+    }
+    return errors;
   }
   /// Applied states obeying `id` seen so far.
   size_t AppliedBy(const std::string& id) {

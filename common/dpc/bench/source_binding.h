@@ -72,6 +72,13 @@ class SourceBinding {
   /// Times the binding moved to a new source after the bound one fell silent.
   uint64_t rebinds() const { return rebinds_; }
 
+  /// What the latest refusal was, for logs and status: "<what> from participant <refused>
+  /// refused: the bench's <who> is <bound> (<n> refused so far)".
+  std::string Refusal(const char* what, const char* who) const {
+    return fmt::format("{} from participant {} refused: the bench's {} is {} ({} refused so far)", what,
+                       SourceName(last_refused_), who, SourceName(source_), refused_);
+  }
+
  private:
   int64_t release_after_ns_;
   bool bound_ = false;

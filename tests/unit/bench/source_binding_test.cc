@@ -27,6 +27,9 @@ TEST(SourceBindingTest, TheFirstSourceIsBoundAndEveryOtherRefusedWhileItTalks) {
   EXPECT_EQ(binding.refused(), 399u);
   EXPECT_EQ(binding.last_refused(), Source(2));
   EXPECT_EQ(binding.rebinds(), 0u);
+  EXPECT_EQ(binding.Refusal("sample", "polarimeter"),
+            "sample from participant 01000000.00000000.00000002 refused: the bench's polarimeter is "
+            "01000000.00000000.00000001 (399 refused so far)");
 }
 
 TEST(SourceBindingTest, ASilentSourceIsReplacedAfterTheReleaseTimeNotBefore) {
