@@ -1,5 +1,7 @@
 #include "service_runtime.h"
 
+#include <memory>
+
 #include <spdlog/sinks/stdout_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -62,6 +64,37 @@ void SetUpLogging(const std::string& service, const CommonOptions& options) {
   logger->set_pattern(fmt::format("%H:%M:%S.%e [{} {}] %^%l%$: %v", service, options.bench_id));
   logger->set_level(spdlog::level::from_str(options.log_level));
   spdlog::set_default_logger(logger);
+}
+
+PeerLog::PeerLog(Now now) : now_(std::move(now)) {
+  if (!now_) {
+    now_ = [] {
+      return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+          .count();
+    };
+  }
+}
+
+void PeerLog::operator()(bool warning, const std::string& text) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const int64_t now_ns = now_();
+  if (!started_ || now_ns - window_start_ns_ >= kWindowNs) {
+    started_ = true;
+    window_start_ns_ = now_ns;
+    lines_in_window_ = 0;
+  }
+  if (lines_in_window_ >= kLines) {
+    ++not_shown_;
+    return;
+  }
+  ++lines_in_window_;
+  const std::string suffix = not_shown_ == 0 ? "" : fmt::format(" ({} peer events before it not shown)", not_shown_);
+  not_shown_ = 0;
+  spdlog::log(warning ? spdlog::level::warn : spdlog::level::info, "{}{}", text, suffix);
+}
+
+std::function<void(bool, const std::string&)> PeerLogger() {
+  return [log = std::make_shared<PeerLog>()](bool warning, const std::string& text) { (*log)(warning, text); };
 }
 
 void RejectionLog::Update(uint64_t count, const std::string& last_reason) {

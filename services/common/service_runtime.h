@@ -4,7 +4,10 @@
 // scenario (a file or the embedded default), logging, and rate-limited reports of rejected
 // input.
 
+#include <chrono>
 #include <cstdint>
+#include <functional>
+#include <mutex>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -48,6 +51,32 @@ std::string DescribeError(const ScenarioError& error, const CommonOptions& optio
 /// Sets up spdlog ("[driver bench1] …" on stderr) at options.log_level (one of the names
 /// --log-level accepts; the option checks it). Calling it again replaces the logger.
 void SetUpLogging(const std::string& service, const CommonOptions& options);
+
+/// Logs what happens to remote participants (discovered, gone, authenticated, refused by DDS
+/// Security) from Fast DDS's threads: at most kLines lines per kWindow, so that a peer creating
+/// participants in a loop cannot flood the log; the next line logged says how many were not.
+class PeerLog {
+ public:
+  static constexpr int kLines = 20;
+  static constexpr int64_t kWindowNs = 10'000'000'000;
+  using Now = std::function<int64_t()>;  ///< monotonic nanoseconds
+  /// `now` defaults to the monotonic clock.
+  explicit PeerLog(Now now = nullptr);
+  /// `warning`: a refusal (logged as a warning), else info.
+  void operator()(bool warning, const std::string& text);
+
+ private:
+  Now now_;
+  std::mutex mutex_;
+  int64_t window_start_ns_ = 0;
+  bool started_ = false;
+  int lines_in_window_ = 0;
+  uint64_t not_shown_ = 0;
+};
+
+/// A PeerLog of its own behind a copyable function (for BusOptions::on_peer, through
+/// bus::DescribedPeerEvents).
+std::function<void(bool warning, const std::string& text)> PeerLogger();
 
 /// Logs rejected input without letting a flood of it stall the loop: the first rejection, then
 /// one line per kEvery more, each with the running count and the latest reason.

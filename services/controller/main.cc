@@ -64,7 +64,8 @@ class ControllerService final : public Service {
         core_(Settings(common, options)),
         participant_({common.domain_id, "dpc-controller/" + options.settings.controller_id,
                       {common.security_dir,
-                       common.identity.empty() ? "controller-" + options.settings.controller_id : common.identity}}),
+                       common.identity.empty() ? "controller-" + options.settings.controller_id : common.identity}},
+                     bus::DescribedPeerEvents(PeerLogger())),
         command_writer_(participant_.MakeWriter<msg::WaveplateCommand>(bench_id_, options.settings.controller_id)),
         status_writer_(participant_.MakeWriter<msg::ControllerStatus>(bench_id_)) {
     devices_ = participant_.MakeReader<msg::DeviceDescription>(

@@ -65,7 +65,8 @@ class PolarimeterService final : public Service {
       : options_(options),
         bench_(LoadServiceScenario(common), options.bench),  // validates: ScenarioError
         participant_({common.domain_id, "dpc-polarimeter/" + common.bench_id,
-                      {common.security_dir, common.identity.empty() ? "polarimeter" : common.identity}}),
+                      {common.security_dir, common.identity.empty() ? "polarimeter" : common.identity}},
+                     bus::DescribedPeerEvents(PeerLogger())),
         // The loop latency is counted, like the error, once the loop has settled: in real time
         // from --settle-s into the run (the first samples meet a controller re-joining and
         // processes touching fresh pages: single stalls of several ms); in lockstep from the start.

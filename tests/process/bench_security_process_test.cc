@@ -204,6 +204,15 @@ TEST_F(BenchSecurityTest, AParticipantWithoutCredentialsSeesNothing) {
   EXPECT_EQ(samples->counters().matched_writers.load(), 0);
   EXPECT_EQ(samples->counters().samples.load(), 0u);
   EXPECT_TRUE(SoonObeys("main"));
+  // The operator sees the refusal in the services' logs, naming the intruder.
+  EXPECT_TRUE(Eventually(
+      [&] {
+        const std::string driver_log = processes_.front()->Log();
+        return driver_log.find("participant refused by DDS Security") != std::string::npos &&
+               driver_log.find("(dpc-test-eavesdropper)") != std::string::npos;
+      },
+      5s))
+      << Logs();
 }
 
 }  // namespace

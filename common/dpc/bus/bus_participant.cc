@@ -96,6 +96,42 @@ std::vector<std::pair<std::string, std::string>> SecurityProperties(const Securi
 class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener {
  public:
   static constexpr size_t kMaxWriters = 4096;
+  static constexpr size_t kMaxNames = 4096;
+  explicit DiscoveryListener(std::function<void(const PeerEvent&)> on_peer) : on_peer_(std::move(on_peer)) {}
+
+  void on_participant_discovery(fdds::DomainParticipant*,
+                                eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
+    using Status = eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERY_STATUS;
+    const auto prefix = info.info.m_guid.guidPrefix;
+    std::string name = info.info.m_participantName.to_string();
+    PeerEvent::Kind kind = PeerEvent::Kind::kDiscovered;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (info.status == Status::DISCOVERED_PARTICIPANT || info.status == Status::CHANGED_QOS_PARTICIPANT) {
+        if (names_.size() < kMaxNames || names_.count(prefix) != 0) names_[prefix] = name;
+        if (info.status == Status::CHANGED_QOS_PARTICIPANT) return;
+      } else {
+        names_.erase(prefix);
+        kind = PeerEvent::Kind::kGone;
+      }
+    }
+    if (on_peer_) on_peer_(PeerEvent{kind, GuidPrefixText(prefix), std::move(name)});
+  }
+  void onParticipantAuthentication(fdds::DomainParticipant*,
+                                   eprosima::fastrtps::rtps::ParticipantAuthenticationInfo&& info) override {
+    using Status = eprosima::fastrtps::rtps::ParticipantAuthenticationInfo::AUTHENTICATION_STATUS;
+    const auto prefix = info.guid.guidPrefix;
+    std::string name;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (auto found = names_.find(prefix); found != names_.end()) name = found->second;
+    }
+    if (on_peer_) {
+      on_peer_(PeerEvent{info.status == Status::AUTHORIZED_PARTICIPANT ? PeerEvent::Kind::kAuthenticated
+                                                                       : PeerEvent::Kind::kRefused,
+                         GuidPrefixText(prefix), std::move(name)});
+    }
+  }
   void on_publisher_discovery(fdds::DomainParticipant*, eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override {
     using Status = eprosima::fastrtps::rtps::WriterDiscoveryInfo::DISCOVERY_STATUS;
     std::lock_guard<std::mutex> lock(mutex_);
@@ -115,9 +151,38 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
   }
 
  private:
+  static std::string GuidPrefixText(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix) {
+    std::string text;
+    for (size_t i = 0; i < eprosima::fastrtps::rtps::GuidPrefix_t::size; ++i) {
+      text += fmt::format("{}{:02x}", i == 0 ? "" : ".", prefix.value[i]);
+    }
+    return text;
+  }
+
+  std::function<void(const PeerEvent&)> on_peer_;
   mutable std::mutex mutex_;
   std::map<eprosima::fastrtps::rtps::GUID_t, std::string> partitions_;
+  std::map<eprosima::fastrtps::rtps::GuidPrefix_t, std::string> names_;  ///< bounded by kMaxNames
 };
+
+std::string Describe(const PeerEvent& event) {
+  const std::string who = event.name.empty() ? event.guid : fmt::format("{} ({})", event.guid, event.name);
+  switch (event.kind) {
+    case PeerEvent::Kind::kDiscovered: return "participant discovered: " + who;
+    case PeerEvent::Kind::kGone: return "participant gone: " + who;
+    case PeerEvent::Kind::kAuthenticated: return "participant authenticated: " + who;
+    case PeerEvent::Kind::kRefused:
+      return "participant refused by DDS Security (not of this bench's CA, expired, revoked, or a failed "
+             "handshake): " + who;
+  }
+  return who;
+}
+
+std::function<void(const PeerEvent&)> DescribedPeerEvents(std::function<void(bool, const std::string&)> sink) {
+  return [sink = std::move(sink)](const PeerEvent& event) {
+    sink(event.kind == PeerEvent::Kind::kRefused, Describe(event));
+  };
+}
 
 std::string ResolveProfilesFile() {
   if (const char* file = std::getenv(kProfilesEnvironmentVariable); file != nullptr && *file) {
@@ -143,7 +208,7 @@ std::string ResolveProfilesFile() {
       kProfilesEnvironmentVariable));
 }
 
-BusParticipant::BusParticipant(const BusOptions& options) : profiles_file_(ResolveProfilesFile()) {
+BusParticipant::BusParticipant(const BusOptions& options, std::function<void(const PeerEvent&)> on_peer) : profiles_file_(ResolveProfilesFile()) {
   if (options.domain_id < 0 || options.domain_id > 232) {
     throw BusError(fmt::format("domain {} out of range: DDS domains are 0…232", options.domain_id));
   }
@@ -163,7 +228,7 @@ BusParticipant::BusParticipant(const BusOptions& options) : profiles_file_(Resol
     qos.properties().properties().emplace_back(name, value);
   }
   secure_ = options.security.enabled();
-  discovery_ = std::make_unique<DiscoveryListener>();
+  discovery_ = std::make_unique<DiscoveryListener>(std::move(on_peer));
   participant_ = factory->create_participant(options.domain_id, qos, discovery_.get(), fdds::StatusMask::none());
   if (participant_ == nullptr) {
     throw BusError(secure_ ? fmt::format("Fast DDS could not create a secure participant on domain {} as \"{}\" "

@@ -67,6 +67,20 @@ struct SecurityOptions {
 /// credentials (file:// URIs). Throws BusError naming a missing file.
 std::vector<std::pair<std::string, std::string>> SecurityProperties(const SecurityOptions& security);
 
+/// Something that happened to a remote participant: discovered (announced, and on a secure
+/// bench authenticated), gone (left or lease expired), or refused by DDS Security's
+/// authentication (not of the bench's CA, expired, revoked, or a handshake that failed).
+struct PeerEvent {
+  enum class Kind { kDiscovered, kGone, kAuthenticated, kRefused };
+  Kind kind;
+  std::string guid;  ///< the remote participant's GUID prefix, "01.0f.…"
+  std::string name;  ///< its participant name ("dpc-driver/bench1"); empty if unknown
+};
+/// "participant refused by DDS Security (…): 01.0f.… (dpc-driver/bench1)".
+std::string Describe(const PeerEvent& event);
+/// An on_peer that hands each event to `sink` as (whether it is a refusal, Describe(event)).
+std::function<void(const PeerEvent&)> DescribedPeerEvents(std::function<void(bool refusal, const std::string&)> sink);
+
 struct BusOptions {
   int domain_id = 0;
   std::string participant_name = "dpc";
@@ -177,7 +191,9 @@ inline SourceId SourceOf(const eprosima::fastdds::dds::SampleInfo& info) {
 class BusParticipant {
  public:
   /// Loads the profiles (ResolveProfilesFile) and creates the participant. Throws BusError.
-  explicit BusParticipant(const BusOptions& options);
+  /// `on_peer` is called from Fast DDS's threads for every PeerEvent (keep it short; it may
+  /// log). Empty: none.
+  explicit BusParticipant(const BusOptions& options, std::function<void(const PeerEvent&)> on_peer = nullptr);
   ~BusParticipant();
   BusParticipant(const BusParticipant&) = delete;
   BusParticipant& operator=(const BusParticipant&) = delete;

@@ -153,6 +153,31 @@ TEST_F(BusParticipantTest, AWriterAndAReaderInTwoParticipantsExchangeASample) {
   EXPECT_EQ(reader->counters().other_benches.load(), 0u);
 }
 
+TEST_F(BusParticipantTest, PeerEventsNameAParticipantWhenItArrivesAndWhenItLeaves) {
+  std::mutex mutex;
+  std::vector<std::string> events;
+  BusParticipant watcher(Options(kExchangeDomain, "dpc_bus_test_watcher"), [&](const PeerEvent& event) {
+    std::lock_guard<std::mutex> lock(mutex);
+    events.push_back(Describe(event));
+  });
+  auto seen = [&](const std::string& text) {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& e : events) {
+      if (e.find(text) != std::string::npos) return true;
+    }
+    return false;
+  };
+  {
+    BusParticipant visitor(Options(kExchangeDomain, "dpc_bus_test_visitor"));
+    EXPECT_TRUE(Eventually([&] { return seen("participant discovered: "); }, kDiscoveryTimeout));
+    EXPECT_TRUE(seen("(dpc_bus_test_visitor)"));
+  }
+  // Deleted: it says goodbye (no lease expiry to wait for).
+  EXPECT_TRUE(Eventually([&] { return seen("participant gone: "); }, kDiscoveryTimeout));
+  std::lock_guard<std::mutex> lock(mutex);
+  EXPECT_EQ(events.size(), 2u) << ::testing::PrintToString(events);
+}
+
 TEST_F(BusParticipantTest, AReaderCountsAndSkipsSamplesOfAnotherBench) {
   BusParticipant publishing(Options(kOtherBenchDomain, "dpc_bus_test_writer"));
   BusParticipant subscribing(Options(kOtherBenchDomain, "dpc_bus_test_reader"));

@@ -1,4 +1,5 @@
 #include "log_limiter.h"
+#include "service_runtime.h"
 
 #include <gtest/gtest.h>
 
@@ -62,6 +63,26 @@ TEST_F(LogLimiterTest, KeepsABoundedNumberOfKeys) {
   }
   // The first key was forgotten long ago: it logs again at once.
   EXPECT_TRUE(limiter_.Log(spdlog::level::info, "key 0", "line"));
+}
+
+TEST_F(LogLimiterTest, PeerEventsAreLoggedUpToABudgetPerWindowThenCounted) {
+  PeerLog log([this] { return now_ns_; });
+  log(false, "participant discovered: a (dpc-driver/bench1)");
+  log(true, "participant refused by DDS Security: b (intruder)");
+  EXPECT_EQ(lines_.str(),
+            "info participant discovered: a (dpc-driver/bench1)\n"
+            "warning participant refused by DDS Security: b (intruder)\n");
+  // A peer creating participants in a loop: the budget of the window, then silence.
+  for (int i = 0; i < 100; ++i) log(true, "participant refused by DDS Security: flood");
+  size_t lines = 0;
+  for (char c : lines_.str()) lines += c == '\n';
+  EXPECT_EQ(lines, static_cast<size_t>(PeerLog::kLines));
+  // The next window's first line counts what was not shown.
+  now_ns_ += PeerLog::kWindowNs;
+  log(false, "participant gone: a (dpc-driver/bench1)");
+  EXPECT_NE(lines_.str().find("participant gone: a (dpc-driver/bench1) (82 peer events before it not shown)"),
+            std::string::npos)
+      << lines_.str();
 }
 
 }  // namespace
