@@ -99,6 +99,7 @@ class DriverService final : public Service {
         bench_id_));
     targets_revision_ = targets_.current().revision;
     first_target_ns_ = WallClockNs();  // (the source timestamp the other drivers see, near enough)
+    started_monotonic_ns_ = MonotonicNs();
     target_writer_->Write(bus::TargetMessage(targets_.current(), bench_id_));
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -113,7 +114,10 @@ class DriverService final : public Service {
         });
     // Another driver on this bench: its target (TRANSIENT_LOCAL: a newcomer sees the one already
     // there at once) comes from a writer of another participant. The driver that started
-    // later (a larger epoch in its revisions; ties: the larger participant GUID) leaves.
+    // later (a larger epoch in its revisions; ties: the larger participant GUID) leaves, but
+    // only while it is starting (kYieldWindowNs): a driver that has been driving never leaves
+    // on a peer's word, so a forged target claiming an earlier start cannot take the bench's
+    // driver away (it is logged as a second driver).
     others_ = participant_.MakeReader<msg::Target>(
         bench_id_, [this](const msg::Target& message, const fdds::SampleInfo& info) { OnTarget(message, info); });
     requests_ = participant_.MakeReader<msg::TargetRequest>(
@@ -253,12 +257,14 @@ class DriverService final : public Service {
         i_am_later = writer.guidPrefix < own.guidPrefix;
       }
     }
+    const bool starting = MonotonicNs() - started_monotonic_ns_ <= kYieldWindowNs;
     std::lock_guard<std::mutex> lock(mutex_);
     log_.Log(spdlog::level::err, "second driver",
-             fmt::format("a second driver on bench {} (participant {}, started {:.3g} s {} this one)", bench_id_,
+             fmt::format("a second driver on bench {} (participant {}, started {:.3g} s {} this one){}", bench_id_,
                          fmt::streamed(writer.guidPrefix), std::abs(started_before_s),
-                         i_am_later ? "before" : "after"));
-    if (i_am_later && !displaced_.exchange(true)) stop();
+                         i_am_later ? "before" : "after",
+                         i_am_later && !starting ? ": ignored, this driver has been driving the waveplates" : ""));
+    if (i_am_later && starting && !displaced_.exchange(true)) stop();
   }
 
   static uint64_t EpochOf(uint64_t revision) { return revision >> 32; }
@@ -312,7 +318,12 @@ class DriverService final : public Service {
   std::unique_ptr<bus::Reader<msg::TargetRequest>> requests_;
   std::unique_ptr<bus::Reader<msg::Target>> others_;  ///< other drivers' targets
   std::atomic<uint64_t> targets_revision_{0};  ///< the first revision this driver published
+  /// How long after its start a driver yields to another one that started earlier: the
+  /// incumbent's TRANSIENT_LOCAL target reaches a newcomer within discovery (tens of ms on
+  /// loopback, a second or so with security handshakes or unicast peers).
+  static constexpr int64_t kYieldWindowNs = 3'000'000'000;
   int64_t first_target_ns_ = 0;  ///< wall clock when it was written (set before any reader exists)
+  int64_t started_monotonic_ns_ = 0;  ///< monotonic clock then
   std::atomic<bool> displaced_{false};
 };
 

@@ -4,7 +4,7 @@
 // foreign instances, floods. Each asserts what the bench does now: the forgery is refused and
 // reported, the loop keeps locking, the driver stays responsive and exits cleanly on SIGTERM.
 // (With DDS Security, permissions keep such writers off the bench altogether:
-// bench_security_process_test.cc.) Domains 49–57.
+// bench_security_process_test.cc.) Domains 49–58.
 
 #include <gtest/gtest.h>
 
@@ -144,6 +144,29 @@ TEST_F(BenchAttackTest, AForgedTargetWithTheLastRevisionIsIgnoredAndTheNextRealR
   ExpectStillLockedByA();
   // The polarimeter said so too.
   EXPECT_NE(Logs().find("target from participant"), std::string::npos);
+  ExpectDriverExitsCleanly();
+}
+
+TEST_F(BenchAttackTest, ATargetClaimingAnEarlierStartDoesNotMakeTheRunningDriverLeave) {
+  // A driver yields to another one that started earlier only while it is starting itself: the
+  // bench has been locked for a while when the forger claims to be a driver started in 1970
+  // (epoch 1 in its revision).
+  StartLockedBench(58);
+  const ErrorStats before = ErrorOver(3500ms);  // and past the driver's 3-s start-up
+  auto targets = participant_->MakeWriter<msg::Target>("bench1");
+  ASSERT_TRUE(Eventually([&] { return targets->matched_readers() >= 3; }, 10s));
+  msg::Target forged;
+  forged.bench_id("bench1");
+  forged.revision((uint64_t{1} << 32) | 1);
+  forged.kind(msg::TARGET_POINT);
+  forged.point({1.0, 0.0, 0.0});
+  targets->Write(forged);  // TRANSIENT_LOCAL and reliable: one write reaches every reader
+  ASSERT_TRUE(Eventually([&] { return driver_->Log().find("ignored, this driver has been driving") != std::string::npos; },
+                         5s))
+      << Logs();
+  ExpectUnmoved("in the second after the forged driver's targets", before, ErrorOver(1000ms));
+  EXPECT_FALSE(driver_->Wait(0ms).has_value()) << "the driver left: " << driver_->Log();
+  ExpectStillLockedByA();
   ExpectDriverExitsCleanly();
 }
 
