@@ -213,6 +213,15 @@ TEST_F(BenchSecurityTest, AParticipantWithoutCredentialsSeesNothing) {
       },
       5s))
       << Logs();
+  // Refused again at each of its announcements (every second), it is named once.
+  const std::string driver_log = processes_.front()->Log();
+  std::istringstream lines(driver_log);
+  size_t refusals = 0;
+  for (std::string line; std::getline(lines, line);) {
+    refusals += line.find("refused by DDS Security") != std::string::npos &&
+                line.find("(dpc-test-eavesdropper)") != std::string::npos;
+  }
+  EXPECT_EQ(refusals, 1u) << driver_log;
 }
 
 }  // namespace

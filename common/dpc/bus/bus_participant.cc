@@ -2,6 +2,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <set>
 #include <string_view>
 #include <utility>
 
@@ -112,6 +113,7 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
         if (info.status == Status::CHANGED_QOS_PARTICIPANT) return;
       } else {
         names_.erase(prefix);
+        refused_.erase(prefix);
         kind = PeerEvent::Kind::kGone;
       }
     }
@@ -121,14 +123,22 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
                                    eprosima::fastrtps::rtps::ParticipantAuthenticationInfo&& info) override {
     using Status = eprosima::fastrtps::rtps::ParticipantAuthenticationInfo::AUTHENTICATION_STATUS;
     const auto prefix = info.guid.guidPrefix;
+    const bool refused = info.status != Status::AUTHORIZED_PARTICIPANT;
     std::string name;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (auto found = names_.find(prefix); found != names_.end()) name = found->second;
+      // A refused participant is handshaken and refused again at each of its announcements
+      // (every second): it is reported once, until it is gone.
+      if (refused) {
+        if (refused_.count(prefix) != 0 || refused_.size() >= kMaxNames) return;
+        refused_.insert(prefix);
+      } else {
+        refused_.erase(prefix);
+      }
     }
     if (on_peer_) {
-      on_peer_(PeerEvent{info.status == Status::AUTHORIZED_PARTICIPANT ? PeerEvent::Kind::kAuthenticated
-                                                                       : PeerEvent::Kind::kRefused,
+      on_peer_(PeerEvent{refused ? PeerEvent::Kind::kRefused : PeerEvent::Kind::kAuthenticated,
                          GuidPrefixText(prefix), std::move(name)});
     }
   }
@@ -163,6 +173,7 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
   mutable std::mutex mutex_;
   std::map<eprosima::fastrtps::rtps::GUID_t, std::string> partitions_;
   std::map<eprosima::fastrtps::rtps::GuidPrefix_t, std::string> names_;  ///< bounded by kMaxNames
+  std::set<eprosima::fastrtps::rtps::GuidPrefix_t> refused_;            ///< reported; bounded by kMaxNames
 };
 
 std::string Describe(const PeerEvent& event) {

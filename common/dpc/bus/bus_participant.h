@@ -67,9 +67,10 @@ struct SecurityOptions {
 /// credentials (file:// URIs). Throws BusError naming a missing file.
 std::vector<std::pair<std::string, std::string>> SecurityProperties(const SecurityOptions& security);
 
-/// Something that happened to a remote participant: discovered (announced, and on a secure
-/// bench authenticated), gone (left or lease expired), or refused by DDS Security's
-/// authentication (not of the bench's CA, expired, revoked, or a handshake that failed).
+/// Something that happened to a remote participant: discovered (announced; on a secure bench
+/// authentication follows), authenticated, gone (left or lease expired), or refused by DDS
+/// Security's authentication (not of the bench's CA, expired, revoked, or a handshake that
+/// failed; reported once per participant, though Fast DDS refuses it at each announcement).
 struct PeerEvent {
   enum class Kind { kDiscovered, kGone, kAuthenticated, kRefused };
   Kind kind;
