@@ -18,6 +18,8 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <mutex>
 #include <pthread.h>
@@ -28,6 +30,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "dpc/cli/command_line.h"
 #include "dpc/cli/exit_code.h"
 #include "dpc/config/scenario_error.h"
 #include "service_runtime.h"
@@ -108,6 +111,12 @@ int ServiceMain(int argc, char** argv, const std::string& description) {
   AddCommonOptions(app, &common);
   typename S::Options options;
   S::AddOptions(app, &options);
+  app.name(argc > 0 ? std::filesystem::path(argv[0]).filename().string() : "dpc-service");
+  cli::AddVersionFlag(app, app.get_name());
+  if (const std::string problem = cli::UnknownNameProblem(app, cli::Arguments(argc, argv)); !problem.empty()) {
+    std::fprintf(stderr, "%s\nRun with --help for more information.\n", problem.c_str());
+    return cli::ToInt(cli::ExitCode::kInvalidInput);
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

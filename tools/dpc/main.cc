@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include "dpc/cli/command_line.h"
 #include "dpc/cli/exit_code.h"
 #include "monitor_command.h"
 #include "plot_command.h"
@@ -37,6 +38,14 @@ int main(int argc, char** argv) {
   CLI::App* target = AddTargetCommand(app, &target_options);
   MonitorOptions monitor_options;
   CLI::App* monitor = AddMonitorCommand(app, &monitor_options);
+  app.name("dpc");
+  dpc::cli::AddVersionFlag(app, "dpc");
+  // An unknown command or option is named before CLI11 parses (it would blame something else).
+  if (const std::string problem = dpc::cli::UnknownNameProblem(app, dpc::cli::Arguments(argc, argv));
+      !problem.empty()) {
+    fmt::print(stderr, "{}\nRun with --help for more information.\n", problem);
+    return ToInt(ExitCode::kInvalidInput);
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,121 @@
+#include "dpc/cli/command_line.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include <fmt/format.h>
+
+#include "dpc/version.h"
+
+namespace dpc::cli {
+namespace {
+
+/// The full command path of `app` ("dpc topic echo").
+std::string PathOf(const CLI::App* app) {
+  std::string path;
+  for (const CLI::App* a = app; a != nullptr; a = a->get_parent()) {
+    path = path.empty() ? a->get_name() : a->get_name() + " " + path;
+  }
+  return path;
+}
+
+/// The known name nearest `name` among `known` if at most 2 edits (and fewer than half of it)
+/// away; else "".
+std::string Nearest(const std::string& name, const std::vector<std::string>& known) {
+  std::string best;
+  size_t best_distance = std::numeric_limits<size_t>::max();
+  for (const auto& k : known) {
+    const size_t d = EditDistance(name, k);
+    if (d < best_distance) {
+      best_distance = d;
+      best = k;
+    }
+  }
+  return best_distance <= 2 && best_distance * 2 < name.size() ? best : std::string();
+}
+
+std::string DidYouMean(const std::string& nearest) {
+  return nearest.empty() ? std::string() : fmt::format(" (did you mean {}?)", nearest);
+}
+
+bool KnowsOption(const CLI::App* app, const std::string& name) {
+  for (const CLI::App* a = app; a != nullptr; a = a->get_parent()) {
+    if (a->get_option_no_throw(name) != nullptr) return true;
+  }
+  return false;
+}
+
+std::vector<std::string> LongOptionsOf(const CLI::App* app) {
+  std::vector<std::string> names;
+  for (const CLI::Option* option : app->get_options()) {
+    for (const auto& n : option->get_lnames()) names.push_back("--" + n);
+  }
+  return names;
+}
+
+}  // namespace
+
+std::string VersionText(const std::string& program) {
+  return fmt::format("{} {} (jacobian_dpc, Fast DDS {})", program, kProjectVersion, kFastDdsVersion);
+}
+
+void AddVersionFlag(CLI::App& app, const std::string& program) {
+  app.set_version_flag("--version", VersionText(program), "Print the version (the project's and Fast DDS's) and exit");
+}
+
+std::vector<std::string> Arguments(int argc, char** argv) {
+  std::vector<std::string> args;
+  for (int i = 1; i < argc; ++i) args.emplace_back(argv[i]);
+  return args;
+}
+
+std::string UnknownNameProblem(const CLI::App& app, const std::vector<std::string>& args) {
+  const CLI::App* current = &app;
+  for (const std::string& arg : args) {
+    if (arg == "--") break;  // everything after is positional
+    if (arg.rfind("--", 0) == 0) {
+      const std::string name = arg.substr(0, arg.find('='));
+      if (!KnowsOption(current, name)) {
+        return fmt::format("{}: unknown option {}{}", PathOf(current), name,
+                           DidYouMean(Nearest(name, LongOptionsOf(current))));
+      }
+      continue;
+    }
+    if (arg.rfind('-', 0) == 0) continue;  // a short flag or a negative number: CLI11 judges
+    auto subcommands = current->get_subcommands([](const CLI::App*) { return true; });
+    if (subcommands.empty()) continue;  // a positional or an option's value
+    const CLI::App* named = nullptr;
+    for (const CLI::App* sub : subcommands) {
+      if (sub->check_name(arg)) named = sub;
+    }
+    if (named != nullptr) {
+      current = named;
+      continue;
+    }
+    // Not a subcommand: fine if this command takes positionals (or it is an option's value).
+    const bool takes_positionals = !current->get_options([](const CLI::Option* o) { return o->get_positional(); }).empty();
+    if (takes_positionals) continue;
+    std::vector<std::string> names;
+    for (const CLI::App* sub : subcommands) names.push_back(sub->get_name());
+    return fmt::format("{}: unknown command '{}'{}; the commands are {}", PathOf(current), arg,
+                       DidYouMean(Nearest(arg, names)), fmt::join(names, ", "));
+  }
+  return {};
+}
+
+size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  std::iota(row.begin(), row.end(), size_t{0});
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+}  // namespace dpc::cli

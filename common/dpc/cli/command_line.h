@@ -1,0 +1,32 @@
+#pragma once
+// What every entry point (dpc and the services) says about itself and about a command line it
+// cannot take: the version (the project's and the Fast DDS it was built against), and an
+// unknown subcommand or option named, with the nearest known name, before CLI11 would blame
+// something else ("dpc simm": "A subcommand is required"; "dpc sim --metod gp": "File does not
+// exist: gp", the flag's value taken for the scenario).
+
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+namespace dpc::cli {
+
+/// "dpc 0.1.0 (jacobian_dpc, Fast DDS 2.9.1)".
+std::string VersionText(const std::string& program);
+
+/// Adds --version (prints VersionText(program), exits 0).
+void AddVersionFlag(CLI::App& app, const std::string& program);
+
+/// The words of argv after the program name.
+std::vector<std::string> Arguments(int argc, char** argv);
+
+/// "" if every subcommand and every long option in `args` is known to `app` (walking into the
+/// subcommands as they are named); else what is unknown and where, with the nearest known
+/// name if one is close ("dpc sim: unknown option --metod (did you mean --method?)").
+std::string UnknownNameProblem(const CLI::App& app, const std::vector<std::string>& args);
+
+/// The number of single-character edits between `a` and `b` (Levenshtein distance).
+size_t EditDistance(const std::string& a, const std::string& b);
+
+}  // namespace dpc::cli

@@ -1,0 +1,68 @@
+#include "dpc/cli/command_line.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+namespace dpc::cli {
+namespace {
+
+TEST(EditDistanceTest, CountsInsertionsDeletionsAndSubstitutions) {
+  EXPECT_EQ(EditDistance("", ""), 0u);
+  EXPECT_EQ(EditDistance("sim", "sim"), 0u);
+  EXPECT_EQ(EditDistance("simm", "sim"), 1u);
+  EXPECT_EQ(EditDistance("--metod", "--method"), 1u);
+  EXPECT_EQ(EditDistance("kitten", "sitting"), 3u);
+  EXPECT_EQ(EditDistance("", "abc"), 3u);
+}
+
+class UnknownNameTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    app_.name("dpc");
+    sim_ = app_.add_subcommand("sim", "");
+    sim_->add_option("scenario", scenario_);
+    sim_->add_option("--method", method_);
+    auto* topic = app_.add_subcommand("topic", "");
+    auto* echo = topic->add_subcommand("echo", "");
+    echo->add_option("topic", scenario_);
+    echo->add_flag("--json", json_);
+    AddVersionFlag(app_, "dpc");
+  }
+  std::string Problem(const std::vector<std::string>& args) { return UnknownNameProblem(app_, args); }
+
+  CLI::App app_{"test"};
+  CLI::App* sim_ = nullptr;
+  std::string scenario_, method_;
+  bool json_ = false;
+};
+
+TEST_F(UnknownNameTest, KnownCommandLinesHaveNoProblem) {
+  EXPECT_EQ(Problem({"sim", "file.pbtxt", "--method", "gp"}), "");
+  EXPECT_EQ(Problem({"sim", "--method=gp"}), "");
+  EXPECT_EQ(Problem({"topic", "echo", "dpc_waveplate_state", "--json"}), "");
+  EXPECT_EQ(Problem({"--version"}), "");
+  EXPECT_EQ(Problem({"sim", "--help"}), "");
+  EXPECT_EQ(Problem({"sim", "--", "--not-an-option"}), "");  // positional after --
+  EXPECT_EQ(Problem({"sim", "-x"}), "");                      // short flags: CLI11 judges
+}
+
+TEST_F(UnknownNameTest, UnknownNamesAreNamedWithTheNearestKnownOne) {
+  EXPECT_EQ(Problem({"simm"}), "dpc: unknown command 'simm' (did you mean sim?); the commands are sim, topic");
+  EXPECT_EQ(Problem({"sim", "--metod", "gp"}), "dpc sim: unknown option --metod (did you mean --method?)");
+  EXPECT_EQ(Problem({"topic", "ech"}), "dpc topic: unknown command 'ech' (did you mean echo?); the commands are echo");
+  EXPECT_EQ(Problem({"topic", "echo", "x", "--jsn"}), "dpc topic echo: unknown option --jsn (did you mean --json?)");
+  // Nothing near: no suggestion.
+  EXPECT_EQ(Problem({"sim", "--seed"}), "dpc sim: unknown option --seed");
+  EXPECT_EQ(Problem({"zz"}), "dpc: unknown command 'zz'; the commands are sim, topic");
+}
+
+TEST(VersionTextTest, NamesTheProgramTheProjectAndFastDds) {
+  const std::string text = VersionText("dpc-driver");
+  EXPECT_EQ(text.rfind("dpc-driver 0.", 0), 0u) << text;
+  EXPECT_NE(text.find("Fast DDS 2."), std::string::npos) << text;
+}
+
+}  // namespace
+}  // namespace dpc::cli
