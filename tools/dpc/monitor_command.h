@@ -12,8 +12,14 @@
 //   the driver's mode: ACTIVE and the obeyed controller (priority), or HOLDING and its reason
 //   missed_deadlines per controller (their DDS deadline misses on the sample topic)
 //   the target's revision
-// On a terminal the line is redrawn in place ('\r'); otherwise (or with --lines) one line per
-// update is printed. Runs until SIGINT/SIGTERM or --duration-s, then exits 0.
+// Every line starts with the loop's condition and how long it has held: LOCKED (the period's
+// mean error below --lock-threshold-deg), LOST, HOLDING (the driver holds), NO SAMPLES, or
+// WAITING (nothing seen yet).
+// On a terminal the line is redrawn in place ('\r') and fitted to the terminal's width: the
+// fields that matter least go first (missed deadlines, the target's revision, φ, the rate),
+// the holding reason is cut to what is left, and nothing ever wraps. Otherwise (or with
+// --lines) one full line per update is printed. Runs until SIGINT/SIGTERM or --duration-s,
+// then exits 0.
 
 #include <CLI/CLI.hpp>
 
@@ -33,6 +39,8 @@ namespace dpc::tools {
 struct MonitorOptions {
   BusToolOptions bus;
   double rate_hz = 5.0;
+  double lock_threshold_deg = 10.0;
+  int width = 0;  ///< 0: the terminal's (redrawing) or unlimited (--lines)
   bool lines = false;
   double duration_s = 0.0;  ///< 0: until stopped
 };
@@ -41,19 +49,30 @@ CLI::App* AddMonitorCommand(CLI::App& app, MonitorOptions* options);
 
 cli::ExitCode RunMonitorCommand(const MonitorOptions& options);
 
+/// The number of characters (Unicode code points) of UTF-8 `text`.
+size_t DisplayWidth(const std::string& text);
+
 /// What the monitor has seen, folded from the bus's messages (not thread-safe: the command
 /// guards it with a mutex). Separate from the DDS wiring so that the line can be tested.
 class MonitorState {
  public:
+  explicit MonitorState(double lock_threshold_deg = 10.0) : lock_threshold_deg_(lock_threshold_deg) {}
   void OnSample(const msg::StokesSample& sample);
   void OnState(const msg::WaveplateState& state);
   void OnStatus(const msg::ControllerStatus& status);
   void OnTarget(const msg::Target& target);
 
   /// The status line for the period of `elapsed_s` since the last call; starts a new period.
-  std::string TakeLine(double elapsed_s);
+  /// `width` > 0: the compact line, at most that many characters (code points) wide.
+  std::string TakeLine(double elapsed_s, int width = 0);
 
  private:
+  enum class Condition { kWaiting, kLocked, kLost, kHolding, kNoSamples };
+  static const char* Name(Condition condition);
+  double lock_threshold_deg_;
+  double clock_s_ = 0.0;  ///< the sum of the periods so far
+  Condition condition_ = Condition::kWaiting;
+  double condition_since_s_ = 0.0;
   struct Controller {
     uint64_t missed_deadlines = 0;
     std::string condition;
