@@ -104,7 +104,7 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
                                 eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
     using Status = eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERY_STATUS;
     const auto prefix = info.info.m_guid.guidPrefix;
-    std::string name = info.info.m_participantName.to_string();
+    std::string name = PrintableName(info.info.m_participantName.to_string());
     PeerEvent::Kind kind = PeerEvent::Kind::kDiscovered;
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -176,6 +176,14 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
   std::set<eprosima::fastrtps::rtps::GuidPrefix_t> refused_;            ///< reported; bounded by kMaxNames
 };
 
+std::string PrintableName(const std::string& name) {
+  constexpr size_t kMaxBytes = 64;
+  std::string out;
+  for (unsigned char c : name.substr(0, kMaxBytes)) out += (c < 0x20 || c == 0x7f) ? '?' : static_cast<char>(c);
+  if (name.size() > kMaxBytes) out += "…";
+  return out;
+}
+
 std::string Describe(const PeerEvent& event) {
   const std::string who = event.name.empty() ? event.guid : fmt::format("{} ({})", event.guid, event.name);
   switch (event.kind) {
@@ -219,7 +227,8 @@ std::string ResolveProfilesFile() {
       kProfilesEnvironmentVariable));
 }
 
-BusParticipant::BusParticipant(const BusOptions& options, std::function<void(const PeerEvent&)> on_peer) : profiles_file_(ResolveProfilesFile()) {
+BusParticipant::BusParticipant(const BusOptions& options, std::function<void(const PeerEvent&)> on_peer)
+    : profiles_file_(ResolveProfilesFile()) {
   if (options.domain_id < 0 || options.domain_id > 232) {
     throw BusError(fmt::format("domain {} out of range: DDS domains are 0…232", options.domain_id));
   }

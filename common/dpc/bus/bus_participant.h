@@ -77,6 +77,9 @@ struct PeerEvent {
   std::string guid;  ///< the remote participant's GUID prefix, "01.0f.…"
   std::string name;  ///< its participant name ("dpc-driver/bench1"); empty if unknown
 };
+/// A remote participant's name as it may be logged: control characters (newlines, terminal
+/// escapes) replaced by '?', at most 64 bytes (then "…"). A peer chooses its name freely.
+std::string PrintableName(const std::string& name);
 /// "participant refused by DDS Security (…): 01.0f.… (dpc-driver/bench1)".
 std::string Describe(const PeerEvent& event);
 /// An on_peer that hands each event to `sink` as (whether it is a refusal, Describe(event)).

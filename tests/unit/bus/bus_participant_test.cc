@@ -178,6 +178,13 @@ TEST_F(BusParticipantTest, PeerEventsNameAParticipantWhenItArrivesAndWhenItLeave
   EXPECT_EQ(events.size(), 2u) << ::testing::PrintToString(events);
 }
 
+TEST(PrintableNameTest, APeersChosenNameCannotBreakALogLine) {
+  EXPECT_EQ(PrintableName("dpc-driver/bench1"), "dpc-driver/bench1");
+  EXPECT_EQ(PrintableName("evil\n12:00:00.000 [driver bench1] info: obeying x\x1b[2J"),
+            "evil?12:00:00.000 [driver bench1] info: obeying x?[2J");
+  EXPECT_EQ(PrintableName(std::string(100, 'a')), std::string(64, 'a') + "…");
+}
+
 TEST_F(BusParticipantTest, AReaderCountsAndSkipsSamplesOfAnotherBench) {
   BusParticipant publishing(Options(kOtherBenchDomain, "dpc_bus_test_writer"));
   BusParticipant subscribing(Options(kOtherBenchDomain, "dpc_bus_test_reader"));
