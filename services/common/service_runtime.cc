@@ -5,6 +5,7 @@
 #include <spdlog/sinks/stdout_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include "dpc/bench/clock.h"
 #include "dpc/scenario_io/scenario_reader.h"
 #include "dpc/cli/scenario_loading.h"
 
@@ -66,14 +67,7 @@ void SetUpLogging(const std::string& service, const CommonOptions& options) {
   spdlog::set_default_logger(logger);
 }
 
-PeerLog::PeerLog(Now now) : now_(std::move(now)) {
-  if (!now_) {
-    now_ = [] {
-      return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-          .count();
-    };
-  }
-}
+PeerLog::PeerLog(Now now) : now_(now ? std::move(now) : Now(MonotonicNs)) {}
 
 void PeerLog::operator()(bool warning, const std::string& text) {
   std::lock_guard<std::mutex> lock(mutex_);

@@ -4,7 +4,6 @@
 // scenario (a file or the embedded default), logging, and rate-limited reports of rejected
 // input.
 
-#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <mutex>

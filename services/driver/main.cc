@@ -10,7 +10,6 @@
 #include <memory>
 #include <mutex>
 
-#include <fmt/ostream.h>
 #include <spdlog/spdlog.h>
 
 #include "dpc/bench/bench_messages.h"
@@ -261,7 +260,7 @@ class DriverService final : public Service {
     std::lock_guard<std::mutex> lock(mutex_);
     log_.Log(spdlog::level::err, "second driver",
              fmt::format("a second driver on bench {} (participant {}, started {:.3g} s {} this one){}", bench_id_,
-                         fmt::streamed(writer.guidPrefix), std::abs(started_before_s),
+                         SourceName(bus::SourceOf(info)), std::abs(started_before_s),
                          i_am_later ? "before" : "after",
                          i_am_later && !starting ? ": ignored, this driver has been driving the waveplates" : ""));
     if (i_am_later && starting && !displaced_.exchange(true)) stop();

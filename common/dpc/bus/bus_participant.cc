@@ -117,7 +117,7 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
         kind = PeerEvent::Kind::kGone;
       }
     }
-    if (on_peer_) on_peer_(PeerEvent{kind, GuidPrefixText(prefix), std::move(name)});
+    if (on_peer_) on_peer_(PeerEvent{kind, SourceName(SourceOf(prefix)), std::move(name)});
   }
   void onParticipantAuthentication(fdds::DomainParticipant*,
                                    eprosima::fastrtps::rtps::ParticipantAuthenticationInfo&& info) override {
@@ -139,7 +139,7 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
     }
     if (on_peer_) {
       on_peer_(PeerEvent{refused ? PeerEvent::Kind::kRefused : PeerEvent::Kind::kAuthenticated,
-                         GuidPrefixText(prefix), std::move(name)});
+                         SourceName(SourceOf(prefix)), std::move(name)});
     }
   }
   void on_publisher_discovery(fdds::DomainParticipant*, eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override {
@@ -161,14 +161,6 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
   }
 
  private:
-  static std::string GuidPrefixText(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix) {
-    std::string text;
-    for (size_t i = 0; i < eprosima::fastrtps::rtps::GuidPrefix_t::size; ++i) {
-      text += fmt::format("{}{:02x}", i == 0 ? "" : ".", prefix.value[i]);
-    }
-    return text;
-  }
-
   std::function<void(const PeerEvent&)> on_peer_;
   mutable std::mutex mutex_;
   std::map<eprosima::fastrtps::rtps::GUID_t, std::string> partitions_;

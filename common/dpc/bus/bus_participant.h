@@ -74,7 +74,7 @@ std::vector<std::pair<std::string, std::string>> SecurityProperties(const Securi
 struct PeerEvent {
   enum class Kind { kDiscovered, kGone, kAuthenticated, kRefused };
   Kind kind;
-  std::string guid;  ///< the remote participant's GUID prefix, "01.0f.…"
+  std::string guid;  ///< the remote participant's GUID prefix, as SourceName writes it
   std::string name;  ///< its participant name ("dpc-driver/bench1"); empty if unknown
 };
 /// A remote participant's name as it may be logged: control characters (newlines, terminal
@@ -183,13 +183,16 @@ class Reader : public eprosima::fastdds::dds::DataReaderListener {
   eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
 };
 
-/// The participant (GUID prefix) that wrote a received sample: who SourceBinding judges.
-inline SourceId SourceOf(const eprosima::fastdds::dds::SampleInfo& info) {
+/// A participant's GUID prefix as a SourceId (what SourceBinding judges and SourceName prints).
+inline SourceId SourceOf(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix) {
   SourceId id{};
-  const auto& prefix = info.sample_identity.writer_guid().guidPrefix.value;
-  static_assert(sizeof(prefix) == std::tuple_size_v<SourceId>);
-  for (size_t i = 0; i < id.size(); ++i) id[i] = prefix[i];
+  static_assert(sizeof(prefix.value) == std::tuple_size_v<SourceId>);
+  for (size_t i = 0; i < id.size(); ++i) id[i] = prefix.value[i];
   return id;
+}
+/// The participant that wrote a received sample.
+inline SourceId SourceOf(const eprosima::fastdds::dds::SampleInfo& info) {
+  return SourceOf(info.sample_identity.writer_guid().guidPrefix);
 }
 
 class BusParticipant {
