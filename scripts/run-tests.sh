@@ -5,7 +5,7 @@
 # Arguments go to CTest (e.g. -R Bench); with arguments, no fuzzing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/setup.sh
+DPC_SETUP_TESTS=1 scripts/setup.sh
 ctest --test-dir "${BUILD_DIR:-build}" --output-on-failure -j"$(nproc)" "$@"
 if [[ $# -eq 0 ]]; then
   scripts/fuzz.sh --seconds "${DPC_FUZZ_SECONDS:-30}" --jobs "$(nproc)"

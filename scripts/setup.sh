@@ -3,6 +3,7 @@
 # configures and builds (Release, in ./build). Safe to run again: it only does what is missing.
 #
 #   scripts/setup.sh            # everything
+#   DPC_SETUP_TESTS=1 scripts/setup.sh   # and what only the tests need (chromium)
 #   BUILD_DIR=out/b scripts/setup.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,6 +19,15 @@ PACKAGES=(
   cyclonedds-dev cyclonedds-tools iproute2 procps python3
   openssl clang libclang-rt-14-dev
 )
+# Node.js and npm: the dashboard's page takes three.js and uPlot from npm at build time. A machine
+# that has them already (e.g. NodeSource's nodejs, which bundles npm) keeps its own.
+if ! command -v npm >/dev/null; then
+  PACKAGES+=(nodejs npm)
+fi
+# The tests drive the dashboard's page in a headless browser (scripts/run-tests.sh sets this).
+if [[ "${DPC_SETUP_TESTS:-0}" == 1 ]]; then
+  PACKAGES+=(chromium)
+fi
 
 missing=()
 for package in "${PACKAGES[@]}"; do

@@ -6,12 +6,14 @@
 //   dpc topic list|echo|hz         the bench's DDS topics (discovery, samples, rates)
 //   dpc target --point S1 S2 S3    change a running bench's target (or --set-normal, --linear)
 //   dpc monitor                    a running bench's live status on one line
+//   dpc dashboard                  a running bench's live view in a web browser
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
 #include "dpc/cli/command_line.h"
 #include "dpc/cli/exit_code.h"
+#include "dashboard_command.h"
 #include "monitor_command.h"
 #include "plot_command.h"
 #include "sim_command.h"
@@ -38,6 +40,8 @@ int main(int argc, char** argv) {
   CLI::App* target = AddTargetCommand(app, &target_options);
   MonitorOptions monitor_options;
   CLI::App* monitor = AddMonitorCommand(app, &monitor_options);
+  DashboardOptions dashboard_options;
+  CLI::App* dashboard = AddDashboardCommand(app, &dashboard_options);
   app.name("dpc");
   dpc::cli::AddVersionFlag(app, "dpc");
   // An unknown command or option is named before CLI11 parses (it would blame something else).
@@ -57,5 +61,6 @@ int main(int argc, char** argv) {
   if (*topic) return ToInt(RunTopicCommand(topic_options));
   if (*target) return ToInt(RunTargetCommand(target_options));
   if (*monitor) return ToInt(RunMonitorCommand(monitor_options));
+  if (*dashboard) return ToInt(RunDashboardCommand(dashboard_options));
   return ToInt(ExitCode::kInvalidInput);
 }

@@ -1,0 +1,410 @@
+#include "dashboard_command.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "dashboard_model.h"
+#include "dashboard_server.h"
+#include "dpc/bus/bus_participant.h"
+#include "dpc/bus/message_conversion.h"
+#include "dpc/config/scenario_error.h"
+#include "dpc/config/scenario_validation.h"
+
+#ifndef DPC_DASHBOARD_BUILD_ASSETS
+#define DPC_DASHBOARD_BUILD_ASSETS ""
+#endif
+
+namespace dpc::tools {
+namespace {
+
+namespace fdds = eprosima::fastdds::dds;
+using Clock = std::chrono::steady_clock;
+using nlohmann::json;
+
+constexpr double kRequestTimeoutS = 5.0;
+constexpr size_t kMaxRequestsPerSecond = 4;
+
+/// JSON text for the page; a string that is not valid UTF-8 (a peer's) is repaired, not thrown.
+std::string Dump(const json& value) { return value.dump(-1, ' ', false, json::error_handler_t::replace); }
+
+bool HasIndex(const std::string& dir) {
+  std::error_code ec;
+  return !dir.empty() && std::filesystem::is_regular_file(dir + "/index.html", ec);
+}
+
+/// A controller's status read at the edge: numbers finite, else why not.
+std::string ReadStatus(const msg::ControllerStatus& m, ControllerStatusReport* out) {
+  const double numbers[] = {m.error_deg(), m.sigma_max(), m.sigma_min(), m.nullspace_active_fraction(),
+                            m.compute_time_mean_s(), m.compute_time_max_s()};
+  for (double v : numbers) {
+    if (!std::isfinite(v)) return "a non-finite figure";
+  }
+  if (m.controller_id().size() == 0) return "no controller_id";
+  out->controller_id = bus::PrintableName(m.controller_id().to_string());
+  out->priority = m.priority();
+  out->law = bus::PrintableName(m.law().to_string());
+  out->obeyed = m.obeyed();
+  out->condition = m.condition().to_string();
+  out->answers_sample = m.answers_sample();
+  out->error_deg = m.error_deg();
+  out->sigma_max = m.sigma_max();
+  out->sigma_min = m.sigma_min();
+  out->nullspace_active_fraction = m.nullspace_active_fraction();
+  out->compute_time_mean_s = m.compute_time_mean_s();
+  out->compute_time_max_s = m.compute_time_max_s();
+  out->updates = m.updates();
+  out->missed_deadlines = m.missed_deadlines();
+  out->last_rejection = m.last_rejection().to_string();
+  out->publish_time_ns = m.publish_time_ns();
+  return "";
+}
+
+/// What the server does with a page's messages: target requests, answered when the driver
+/// answers (or does not).
+class TargetRequests {
+ public:
+  TargetRequests(bus::Writer<msg::TargetRequest>* writer, const DashboardOptions& o) : writer_(writer), options_(o) {}
+
+  /// Before any message or reply arrives; `server` outlives the readers that call OnReply.
+  void SetServer(DashboardServer* server) { server_ = server; }
+
+  /// On the server's thread: a page's message.
+  void OnPageMessage(uint64_t client, const std::string& text) {
+    std::string tag;
+    std::string error;
+    const std::optional<TargetConfig> target = ParsePageTargetRequest(text, &tag, &error);
+    if (!target) return Answer(client, tag, false, error, 0);
+    if (writer_ == nullptr) {
+      return Answer(client, tag, false,
+                    "this dashboard may not publish target requests (its DDS identity has no such permission: "
+                    "give --identity operator)", 0);
+    }
+    const double now_s = Now();
+    std::string request_id;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (const auto& [id, p] : pending_) {
+        if (p.client == client) {
+          return Answer(client, tag, false, "a request of this page is still waiting for the driver's answer", 0);
+        }
+      }
+      while (!recent_s_.empty() && recent_s_.front() < now_s - 1.0) recent_s_.pop_front();
+      if (recent_s_.size() >= kMaxRequestsPerSecond) {
+        return Answer(client, tag, false, fmt::format("at most {} target requests a second", kMaxRequestsPerSecond), 0);
+      }
+      if (writer_->matched_readers() == 0) {
+        return Answer(client, tag, false,
+                      fmt::format("no driver listens for target requests on domain {} bench {} (is dpc-driver "
+                                  "running?) — nothing sent",
+                                  options_.bus.domain_id, options_.bus.bench_id), 0);
+      }
+      request_id = fmt::format("dpc-dashboard-{}-{}", static_cast<long>(getpid()), ++count_);
+      pending_[request_id] = Pending{client, tag, now_s};
+      recent_s_.push_back(now_s);
+    }
+    msg::TargetRequest request;
+    request.bench_id(options_.bus.bench_id);
+    request.request_id(request_id);
+    request.kind(target->kind == TargetConfig::Kind::kPoint ? msg::TARGET_POINT : msg::TARGET_SET);
+    request.point(bus::ToArray(target->point));
+    request.normal(bus::ToArray(target->normal));
+    request.offset(target->offset);
+    if (!writer_->Write(request)) {
+      Finish(request_id, false, "Fast DDS refused to write the request", 0);
+    }
+  }
+
+  /// The driver's reply, or a target naming one of our requests.
+  void OnReply(const std::string& request_id, bool accepted, const std::string& message, uint64_t revision) {
+    Finish(request_id, accepted, message, revision);
+  }
+
+  /// Requests the driver never answered.
+  void ExpireOld() {
+    std::vector<std::string> expired;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (const auto& [id, p] : pending_) {
+        if (Now() - p.sent_s > kRequestTimeoutS) expired.push_back(id);
+      }
+    }
+    for (const auto& id : expired) {
+      Finish(id, false, fmt::format("no answer from the driver within {:g} s", kRequestTimeoutS), 0);
+    }
+  }
+
+ private:
+  struct Pending {
+    uint64_t client = 0;
+    std::string tag;
+    double sent_s = 0.0;
+  };
+
+  double Now() const { return std::chrono::duration<double>(Clock::now().time_since_epoch()).count(); }
+
+  void Finish(const std::string& request_id, bool accepted, const std::string& message, uint64_t revision) {
+    Pending p;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      auto it = pending_.find(request_id);
+      if (it == pending_.end()) return;  // not ours, or answered already
+      p = it->second;
+      pending_.erase(it);
+    }
+    Answer(p.client, p.tag, accepted, message, revision, request_id);
+  }
+
+  void Answer(uint64_t client, const std::string& tag, bool accepted, const std::string& message, uint64_t revision,
+              const std::string& request_id = "") {
+    json answer = {{"type", "target_reply"}, {"tag", tag}, {"accepted", accepted}, {"message", message}};
+    if (!request_id.empty()) answer["request_id"] = request_id;
+    if (accepted) {
+      answer["revision"] = std::to_string(revision);  // beyond 2^53: text
+      answer["revision_count"] = RevisionCount(revision);
+    }
+    if (server_ != nullptr) server_->Send(client, Dump(answer));
+  }
+
+  DashboardServer* server_ = nullptr;
+  bus::Writer<msg::TargetRequest>* writer_;
+  const DashboardOptions& options_;
+  std::mutex mutex_;
+  std::map<std::string, Pending> pending_;
+  std::deque<double> recent_s_;
+  uint64_t count_ = 0;
+};
+
+}  // namespace
+
+std::string DefaultDashboardAssets() {
+  if (const char* env = std::getenv("DPC_DASHBOARD_ASSETS"); env != nullptr && *env != '\0') return env;
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const std::string installed = (exe.parent_path().parent_path() / "share" / "dpc" / "dashboard").string();
+    if (HasIndex(installed)) return installed;
+  }
+  if (HasIndex(DPC_DASHBOARD_BUILD_ASSETS)) return DPC_DASHBOARD_BUILD_ASSETS;
+  return "";
+}
+
+std::optional<TargetConfig> ParsePageTargetRequest(const std::string& text, std::string* tag, std::string* error) {
+  const json message = json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (message.is_discarded() || !message.is_object()) {
+    *error = "not a JSON object";
+    return std::nullopt;
+  }
+  if (auto it = message.find("tag"); it != message.end() && it->is_string()) {
+    *tag = bus::PrintableName(it->get<std::string>());
+  }
+  auto type = message.find("type");
+  if (type == message.end() || !type->is_string() || type->get<std::string>() != "set_target") {
+    *error = "unknown request (the dashboard takes {\"type\": \"set_target\", …})";
+    return std::nullopt;
+  }
+  const auto triple = [&](const char* name, Vector3* out) {
+    auto it = message.find(name);
+    if (it == message.end() || !it->is_array() || it->size() != 3) {
+      *error = fmt::format("{}: give three numbers", name);
+      return false;
+    }
+    for (size_t i = 0; i < 3; ++i) {
+      if (!(*it)[i].is_number()) {
+        *error = fmt::format("{}: give three numbers", name);
+        return false;
+      }
+      (*out)[static_cast<Eigen::Index>(i)] = (*it)[i].get<double>();
+    }
+    return true;
+  };
+  auto kind = message.find("kind");
+  const std::string k = kind != message.end() && kind->is_string() ? kind->get<std::string>() : "";
+  TargetConfig target;
+  if (k == "point") {
+    target.kind = TargetConfig::Kind::kPoint;
+    Vector3 point;
+    if (!triple("point", &point)) return std::nullopt;
+    target.point = point;
+  } else if (k == "set") {
+    target.kind = TargetConfig::Kind::kSet;
+    if (!triple("normal", &target.normal)) return std::nullopt;
+    auto offset = message.find("offset");
+    if (offset != message.end()) {
+      if (!offset->is_number()) {
+        *error = "offset: give a number";
+        return std::nullopt;
+      }
+      target.offset = offset->get<double>();
+    }
+  } else if (k == "linear") {
+    target.kind = TargetConfig::Kind::kSet;
+    target.normal = Vector3::UnitZ();
+    target.offset = 0.0;
+  } else {
+    *error = "kind: give \"point\", \"set\" or \"linear\"";
+    return std::nullopt;
+  }
+  try {
+    ValidateTargetConfig(target);
+  } catch (const ScenarioError& e) {
+    std::string location = e.location();
+    if (location.rfind("target.", 0) == 0) location = location.substr(7);
+    *error = location + ": " + e.message();
+    return std::nullopt;
+  }
+  return target;
+}
+
+CLI::App* AddDashboardCommand(CLI::App& app, DashboardOptions* o) {
+  CLI::App* dashboard = app.add_subcommand(
+      "dashboard", "Live web view of a bench: Poincaré sphere, error, phi, driver and controllers; set the target");
+  AddBusToolOptions(*dashboard, &o->bus, "The bench to show");
+  dashboard->add_option("--port", o->port, "TCP port of the page (0: any free port; the URL is printed)")
+      ->check(CLI::Range(0, 65535))
+      ->capture_default_str();
+  dashboard->add_option("--bind", o->bind_address,
+                        "Address to listen on (127.0.0.1: this host only; another address exposes the page "
+                        "and its target control to that network)")
+      ->capture_default_str();
+  dashboard->add_option("--push-hz", o->push_hz, "Snapshots pushed to the page per second")
+      ->check(CLI::Range(1.0, 60.0))
+      ->capture_default_str();
+  dashboard->add_option("--lock-threshold-deg", o->lock_threshold_deg,
+                        "LOCKED while the mean error of a push period is below this (degrees)")
+      ->check(CLI::Range(0.0, 180.0))
+      ->capture_default_str();
+  dashboard->add_option("--assets", o->assets_dir,
+                        "Directory of the page's files (default: $DPC_DASHBOARD_ASSETS, the installed "
+                        "share/dpc/dashboard, or the build tree's)");
+  dashboard->add_option("--duration-s", o->duration_s, "Stop after this long (0: until SIGINT/SIGTERM)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  return dashboard;
+}
+
+cli::ExitCode RunDashboardCommand(const DashboardOptions& o) {
+  if (o.bus.bench_id.empty() || o.bus.bench_id == "*") {
+    fmt::print(stderr, "dpc dashboard: --bench-id: give one bench (\"{}\" would mix benches)\n", o.bus.bench_id);
+    return cli::ExitCode::kInvalidInput;
+  }
+  const std::string assets = o.assets_dir.empty() ? DefaultDashboardAssets() : o.assets_dir;
+  if (!HasIndex(assets)) {
+    fmt::print(stderr,
+               "dpc dashboard: the page's files were not found{} (build the dpc_dashboard_assets target, "
+               "which copies three.js and uPlot from npm, or give --assets DIR)\n",
+               assets.empty() ? "" : fmt::format(" in {}", assets));
+    return cli::ExitCode::kInitializationError;
+  }
+  StopSignals signals;
+  try {
+    std::mutex mutex;
+    const auto start = Clock::now();
+    const auto now_s = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+    DashboardModel model(DashboardModelOptions{o.lock_threshold_deg});
+    bus::BusParticipant participant(o.bus.Participant("dpc dashboard", "operator"));
+    const std::string& bench = o.bus.bench_id;
+
+    std::unique_ptr<bus::Writer<msg::TargetRequest>> request_writer;
+    try {
+      request_writer = participant.MakeWriter<msg::TargetRequest>(bench);
+    } catch (const std::exception& e) {
+      fmt::print(stderr, "dpc dashboard: read-only, the page cannot set the target: {}\n", e.what());
+    }
+    TargetRequests requests(request_writer.get(), o);
+    // The server before the readers: they go first (reverse order), so no callback answers
+    // through a server that is gone.
+    DashboardServer web(DashboardServerOptions{o.bind_address, o.port, assets},
+                        [&](uint64_t client, const std::string& text) { requests.OnPageMessage(client, text); });
+    requests.SetServer(&web);
+
+    auto replies = participant.MakeReader<msg::TargetReply>(bench, [&](const msg::TargetReply& r, const fdds::SampleInfo&) {
+      requests.OnReply(r.request_id().to_string(), r.accepted(), r.message().to_string(), r.revision());
+    });
+    auto targets = participant.MakeReader<msg::Target>(bench, [&](const msg::Target& m, const fdds::SampleInfo&) {
+      BenchTarget read;
+      std::string problem = bus::ReadTarget(m, &read);
+      std::lock_guard<std::mutex> lock(mutex);
+      if (!problem.empty()) return model.OnRefused("dpc_target", problem);
+      model.OnTarget(read);
+      if (!read.request_id.empty()) requests.OnReply(read.request_id, true, "", read.revision);
+    });
+    auto devices = participant.MakeReader<msg::DeviceDescription>(
+        bench, [&](const msg::DeviceDescription& m, const fdds::SampleInfo&) {
+          DeviceDescription read;
+          std::string problem = bus::ReadDevice(m, &read);
+          std::lock_guard<std::mutex> lock(mutex);
+          if (!problem.empty()) return model.OnRefused("dpc_device_description", problem);
+          model.OnDevice(read);
+        });
+    BenchSample sample;
+    auto samples = participant.MakeReader<msg::StokesSample>(bench, [&](const msg::StokesSample& m, const fdds::SampleInfo&) {
+      std::lock_guard<std::mutex> lock(mutex);
+      std::string problem = bus::ReadSample(m, &sample);
+      if (!problem.empty()) return model.OnRefused("dpc_stokes_sample", problem);
+      model.OnSample(sample);
+    });
+    DriverState state;
+    auto states = participant.MakeReader<msg::WaveplateState>(
+        bench, [&](const msg::WaveplateState& m, const fdds::SampleInfo&) {
+          std::lock_guard<std::mutex> lock(mutex);
+          const int controls = static_cast<int>(std::min<size_t>(m.phi_applied().size(), msg::MAX_CONTROLS));
+          std::string problem = bus::ReadState(m, controls, &state);
+          if (!problem.empty()) return model.OnRefused("dpc_waveplate_state", problem);
+          model.OnState(state);
+        });
+    auto statuses = participant.MakeReader<msg::ControllerStatus>(
+        bench, [&](const msg::ControllerStatus& m, const fdds::SampleInfo&) {
+          ControllerStatusReport report;
+          std::string problem = ReadStatus(m, &report);
+          std::lock_guard<std::mutex> lock(mutex);
+          if (!problem.empty()) return model.OnRefused("dpc_controller_status", problem);
+          model.OnStatus(report, now_s());
+        });
+
+    const std::string host = o.bind_address.find(':') != std::string::npos ? "[" + o.bind_address + "]" : o.bind_address;
+    fmt::print("dpc dashboard: http://{}:{}/\n", host == "0.0.0.0" ? "127.0.0.1" : host, web.port());
+    std::fflush(stdout);
+    fmt::print(stderr, "dpc dashboard: domain {}, bench {}, page files {}{}\n", o.bus.domain_id, bench, assets,
+               o.duration_s > 0 ? fmt::format(", {:g} s", o.duration_s) : ", Ctrl-C to stop");
+
+    const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / o.push_hz));
+    auto next = start + period;
+    while (!StopSignals::requested()) {
+      while (Clock::now() < next && !StopSignals::requested()) {
+        std::this_thread::sleep_for(std::min<Clock::duration>(next - Clock::now(), std::chrono::milliseconds(20)));
+      }
+      if (StopSignals::requested()) break;
+      next += period;
+      if (next < Clock::now()) next = Clock::now() + period;  // fell behind: do not burst
+      json snapshot;
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        snapshot = model.TakeSnapshot(now_s());
+      }
+      snapshot["bench_id"] = bench;
+      snapshot["domain"] = o.bus.domain_id;
+      snapshot["push_hz"] = o.push_hz;
+      snapshot["read_only"] = request_writer == nullptr;
+      snapshot["pages"] = web.clients();
+      web.Broadcast(Dump(snapshot));
+      requests.ExpireOld();
+      if (o.duration_s > 0 && now_s() >= o.duration_s) break;
+    }
+    if (StopSignals::requested()) fmt::print(stderr, "dpc dashboard: stopped by signal\n");
+    return cli::ExitCode::kOk;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "dpc dashboard: {}\n", e.what());
+    return cli::ExitCode::kInitializationError;
+  }
+}
+
+}  // namespace dpc::tools
