@@ -67,7 +67,7 @@ LIVELINESS_PROTECTION=${DPC_LIVELINESS_PROTECTION:-ENCRYPT}
 METADATA_PROTECTION=${DPC_METADATA_PROTECTION:-SIGN}
 DATA_PROTECTION=${DPC_DATA_PROTECTION:-ENCRYPT}
 TOPICS="dpc_stokes_sample dpc_waveplate_command dpc_waveplate_state dpc_controller_status
-        dpc_device_description dpc_target dpc_target_request dpc_target_reply"
+        dpc_device_description dpc_target dpc_target_request dpc_target_reply dpc_bench_summary"
 
 OUT="" BENCH=bench1 CONTROLLERS=main,standby DAYS=365 DOMAINS="" ROTATE=0 EXPIRED="" REVOKED=0
 usage() { awk 'NR > 1 && !/^#/ { exit } NR > 1 { sub(/^# ?/, ""); print }' "${BASH_SOURCE[0]}" >&2; exit 2; }
@@ -282,7 +282,7 @@ grant_rules() {
       rule subscribe "$B" dpc_stokes_sample dpc_target_request dpc_controller_status dpc_target
       rule subscribe "$ctl.*" dpc_waveplate_command ;;
     polarimeter)
-      rule publish "$B" dpc_stokes_sample
+      rule publish "$B" dpc_stokes_sample dpc_bench_summary
       rule subscribe "$B" dpc_waveplate_state dpc_device_description dpc_target ;;
     controller-*)
       rule publish "$ctl.${1#controller-}" dpc_waveplate_command
@@ -325,7 +325,17 @@ for name in "${IDENTITIES[@]}"; do
   if [[ $ROTATE == 0 && $expired == 0 && -s $dir/key.pem && -s $dir/cert.pem && -s $dir/permissions.p7s ]]; then
     state=""
     openssl x509 -checkend 0 -noout -in "$dir/cert.pem" >/dev/null || state=", EXPIRED: use --rotate"
-    log "kept $name (valid until $(cert_date "$dir/cert.pem" enddate)$state)"
+    # The grant follows this script's rules (a topic added since they were signed, say): kept
+    # identities get their permissions signed again when the rules changed.
+    permissions_xml "$name" "$dir/cert.pem" >"$dir/.permissions.xml.new"
+    if cmp -s "$dir/.permissions.xml.new" "$dir/permissions.xml"; then
+      rm -f "$dir/.permissions.xml.new"
+      log "kept $name (valid until $(cert_date "$dir/cert.pem" enddate)$state)"
+    else
+      sign "$dir/.permissions.xml.new" "$dir/.permissions.p7s.new"
+      install_into "$dir" permissions.xml permissions.p7s
+      log "kept $name (valid until $(cert_date "$dir/cert.pem" enddate)$state), its permissions updated"
+    fi
     continue
   fi
   mkdir -p "$dir"

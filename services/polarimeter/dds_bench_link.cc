@@ -1,5 +1,6 @@
 #include "dds_bench_link.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include <fmt/format.h>
@@ -11,13 +12,25 @@
 namespace dpc::services {
 
 DdsBenchLink::DdsBenchLink(bus::BusParticipant* participant, int control_count, const std::string& bench_id,
-                           double lockstep_timeout_s, double latency_warmup_s)
+                           double lockstep_timeout_s, double latency_warmup_s, double summary_hz,
+                           const TargetConfig& target)
     : bench_id_(bench_id),
       control_count_(control_count),
       lockstep_timeout_s_(lockstep_timeout_s),
+      summary_(target),
       latest_(WaveplateMotion::Still(ControlVector::Zero(control_count))),
       latency_(WallClockNs() + static_cast<int64_t>(latency_warmup_s * 1e9)) {
   writer_ = participant->MakeWriter<msg::StokesSample>(bench_id);
+  if (summary_hz > 0) {
+    try {
+      summary_writer_ = participant->MakeWriter<msg::BenchSummary>(bench_id);
+      summary_period_ns_ = static_cast<int64_t>(1e9 / summary_hz);
+      next_summary_ns_ = MonotonicNs() + summary_period_ns_;
+    } catch (const std::exception& e) {
+      // Permissions signed before the topic existed: the bench runs, observers miss the summary.
+      spdlog::warn("no dpc_bench_summary ({}); make-bench-pki.sh signs the permissions that grant it", e.what());
+    }
+  }
   states_ = participant->MakeReader<msg::WaveplateState>(
       bench_id, [this](const msg::WaveplateState& state, const auto& info) { OnState(state, bus::SourceOf(info)); });
   targets_ = participant->MakeReader<msg::Target>(
@@ -27,11 +40,24 @@ DdsBenchLink::DdsBenchLink(bus::BusParticipant* participant, int control_count, 
 DdsBenchLink::~DdsBenchLink() {
   states_.reset();
   targets_.reset();
+  summary_writer_.reset();
 }
 
 void DdsBenchLink::Publish(const BenchSample& sample) {
   bus::WriteSample(sample, bench_id_, &sample_message_);
   writer_->Write(sample_message_);
+  if (!summary_writer_) return;
+  const int64_t now_ns = MonotonicNs();
+  BenchSummary summary;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    summary_.OnSample(sample);
+    if (now_ns < next_summary_ns_) return;
+    summary = summary_.Take(now_ns, WallClockNs());
+  }
+  next_summary_ns_ = std::max(next_summary_ns_ + summary_period_ns_, now_ns);  // no burst after a stall
+  bus::WriteSummary(summary, bench_id_, &summary_message_);
+  summary_writer_->Write(summary_message_);
 }
 
 void DdsBenchLink::Stop() {
@@ -117,6 +143,7 @@ void DdsBenchLink::OnState(const msg::WaveplateState& message, const SourceId& s
     return;
   }
   latency_.OnState(state_, receive_wall_ns);
+  summary_.OnState(state_, receive_wall_ns);
   // One value per control: latest_ keeps its size, nothing allocates.
   latest_ = state_.motion;
   latest_fresh_ = true;
@@ -140,6 +167,7 @@ void DdsBenchLink::OnTarget(const msg::Target& message, const SourceId& source) 
   if (target.revision > target_revision_) {
     target_revision_ = target.revision;
     target_change_ = target.target;
+    summary_.OnTarget(target.target);
   }
 }
 

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench_core.h"
+#include "dpc/bench/bench_summary.h"
 #include "dpc/bus/bus_participant.h"
 #include "log_limiter.h"
 #include "loop_latency.h"
@@ -22,9 +23,10 @@ namespace dpc::services {
 class DdsBenchLink final : public BenchLink {
  public:
   /// Lockstep: gives up on a sample no state answers within `lockstep_timeout_s`. The loop
-  /// latency counts samples published from `latency_warmup_s` on.
+  /// latency counts samples published from `latency_warmup_s` on. Every 1/`summary_hz` s (0:
+  /// never) a BenchSummary of what it saw goes to dpc_bench_summary, starting from `target`.
   DdsBenchLink(bus::BusParticipant* participant, int control_count, const std::string& bench_id,
-               double lockstep_timeout_s, double latency_warmup_s);
+               double lockstep_timeout_s, double latency_warmup_s, double summary_hz, const TargetConfig& target);
   ~DdsBenchLink() override;
 
   void Publish(const BenchSample& sample) override;
@@ -53,6 +55,12 @@ class DdsBenchLink final : public BenchLink {
   std::atomic<bool> stopped_{false};
   msg::StokesSample sample_message_;  ///< written in place (Publish runs on the bench's thread)
   std::unique_ptr<bus::Writer<msg::StokesSample>> writer_;
+  // The summary: folded under mutex_, written on the bench's thread when due.
+  std::unique_ptr<bus::Writer<msg::BenchSummary>> summary_writer_;  ///< null: no summaries
+  int64_t summary_period_ns_ = 0;
+  int64_t next_summary_ns_ = 0;
+  BenchSummaryBuilder summary_;
+  msg::BenchSummary summary_message_;
   std::unique_ptr<bus::Reader<msg::WaveplateState>> states_;
   std::unique_ptr<bus::Reader<msg::Target>> targets_;
   mutable std::mutex mutex_;

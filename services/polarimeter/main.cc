@@ -40,6 +40,7 @@ class PolarimeterService final : public Service {
     double lockstep_timeout_s = 10.0;
     std::string trace_path;
     bool json = false;
+    double summary_hz = 20.0;
   };
 
   static void AddOptions(CLI::App& app, Options* o) {
@@ -58,6 +59,9 @@ class PolarimeterService final : public Service {
         ->check(CLI::Range(0.1, 3600.0))->capture_default_str();
     app.add_option("--trace", o->trace_path, "Write every sample to this CSV trace (dpc sim's format)");
     app.add_flag("--json", o->json, "Print the run's summary as one JSON object (dpc sim's fields)");
+    app.add_option("--summary-hz", o->summary_hz,
+                   "Summaries of the bench per second on dpc_bench_summary (for dpc dashboard; 0: none)")
+        ->check(CLI::Range(0.0, 100.0))->capture_default_str();
   }
   static std::string LogName(const Options&) { return "polarimeter"; }
 
@@ -71,7 +75,8 @@ class PolarimeterService final : public Service {
         // from --settle-s into the run (the first samples meet a controller re-joining and
         // processes touching fresh pages: single stalls of several ms); in lockstep from the start.
         link_(&participant_, bench_.control_count(), common.bench_id, options.lockstep_timeout_s,
-              options.bench.lockstep ? 0.0 : options.bench.settle_s) {
+              options.bench.lockstep ? 0.0 : options.bench.settle_s, options.summary_hz,
+              bench_.scenario().target) {
     if (!options.trace_path.empty()) {
       std::vector<std::string> names;
       for (const auto& c : bench_.chain().controls()) names.push_back(c.name);

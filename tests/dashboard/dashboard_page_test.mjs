@@ -28,7 +28,7 @@ function skip(reason) { console.log(`SKIP: ${reason}`); process.exit(77); }
 if (!fs.existsSync(chromiumPath)) skip(`${chromiumPath} not found (apt-get install chromium)`);
 let chromium;
 try {
-  chromium = createRequire(path.join(args.modules, 'package.json'))('playwright-core').chromium;
+  chromium = createRequire(path.resolve(args.modules, 'package.json'))('playwright-core').chromium;
 } catch (e) {
   skip(`playwright-core not installed in ${args.modules} (the dpc_dashboard_test_deps target runs npm ci): ${e.message}`);
 }

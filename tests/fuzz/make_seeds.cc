@@ -139,6 +139,41 @@ void States() {
   Seed("read_state", "ramping", message, ok);
 }
 
+void Summaries() {
+  auto ok = [](const msg::BenchSummary& m) {
+    BenchSummary s;
+    return bus::ReadSummary(m, &s).empty();
+  };
+  BenchSummary summary;
+  summary.sequence = 1;
+  summary.publish_time_ns = 1'700'000'000'000'000'000;
+  summary.period_s = 0.05;
+  msg::BenchSummary message;
+  bus::WriteSummary(summary, "bench", &message);
+  Seed("read_summary", "nothing_yet", message, ok);
+  summary.sequence = 2;
+  summary.samples = 500;
+  summary.last_sample = 1000;
+  summary.s_in = StokesVector(0.0, 1.0, 0.0);
+  summary.s_out = StokesVector(0.0, 0.6, 0.8);
+  summary.trail = {{1, 0, 0, 0, 0.6, 0.8}, {0, 1, 0, 0, 0.8, 0.6}};
+  summary.error_mean_deg = 1.5;
+  summary.error_max_deg = 3.0;
+  summary.latencies = 500;
+  summary.latency_p50_us = 200;
+  summary.latency_p90_us = 300;
+  summary.latency_p99_us = 900;
+  summary.latency_max_us = 2000;
+  DriverState state;
+  state.motion = WaveplateMotion::Still(Values(3, 0.1, 0.2));
+  state.mode = DriverMode::kActive;
+  state.obeyed_controller_id = "main";
+  state.saturated[2] = true;
+  summary.state = state;
+  bus::WriteSummary(summary, "bench", &message);
+  Seed("read_summary", "locked", message, ok);
+}
+
 ControlMapConfig Polynomial() {
   ControlMapConfig map;
   map.kind = ControlMapConfig::Kind::kPolynomial;
@@ -237,6 +272,7 @@ int main(int argc, char** argv) {
     Devices();
     Targets();
     Requests();
+    Summaries();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "dpc_fuzz_seeds: %s\n", e.what());
     return 1;

@@ -85,6 +85,7 @@ const std::vector<BusTopic>& BenchTopics() {
       TopicOf<msg::Target>("target", "dpc::msg::Target"),
       TopicOf<msg::TargetRequest>("request", "dpc::msg::TargetRequest"),
       TopicOf<msg::TargetReply>("reply", "dpc::msg::TargetReply"),
+      TopicOf<msg::BenchSummary>("summary", "dpc::msg::BenchSummary"),
   };
   return topics;
 }
@@ -251,6 +252,39 @@ Json ToJson(const msg::TargetRequest& m) {
               {"offset", Number(m.offset())}};
 }
 
+Json ToJson(const msg::BenchSummary& m) {
+  Json saturated = Json::array();
+  for (bool b : m.saturated()) saturated.push_back(b);
+  return Json{{"bench_id", Text(m.bench_id())},
+              {"sequence_number", m.sequence_number()},
+              {"publish_time_ns", m.publish_time_ns()},
+              {"period_s", Number(m.period_s())},
+              {"samples", m.samples()},
+              {"last_sample", m.last_sample()},
+              {"s_in", Numbers(m.s_in())},
+              {"s_out", Numbers(m.s_out())},
+              {"trail", Numbers(m.trail())},
+              {"error_known", m.error_known()},
+              {"error_mean_deg", Number(m.error_mean_deg())},
+              {"error_max_deg", Number(m.error_max_deg())},
+              {"latencies", m.latencies()},
+              {"latency_p50_us", Number(m.latency_p50_us())},
+              {"latency_p90_us", Number(m.latency_p90_us())},
+              {"latency_p99_us", Number(m.latency_p99_us())},
+              {"latency_max_us", Number(m.latency_max_us())},
+              {"state_known", m.state_known()},
+              {"mode", DriverModeName(m.mode())},
+              {"reason", Text(m.reason())},
+              {"obeyed_controller_id", Text(m.obeyed_controller_id())},
+              {"obeyed_priority", m.obeyed_priority()},
+              {"phi_applied", Numbers(m.phi_applied())},
+              {"saturated", std::move(saturated)},
+              {"commands_applied", m.commands_applied()},
+              {"commands_rejected", m.commands_rejected()},
+              {"commands_limited", m.commands_limited()},
+              {"controller_switches", m.controller_switches()}};
+}
+
 Json ToJson(const msg::TargetReply& m) {
   return Json{{"bench_id", Text(m.bench_id())},
               {"request_id", Text(m.request_id())},
@@ -335,6 +369,18 @@ std::string ToText(const msg::Target& m) {
 std::string ToText(const msg::TargetRequest& m) {
   return fmt::format("[{}] target request {}: {}", Text(m.bench_id()), Text(m.request_id()),
                      TargetShape(m));
+}
+
+std::string ToText(const msg::BenchSummary& m) {
+  const std::string error = m.error_known() ? fmt::format("{:.3f} (max {:.3f})", m.error_mean_deg(), m.error_max_deg())
+                                            : std::string("-");
+  const std::string latency = m.latencies() > 0 ? fmt::format("p50 {:.0f} p99 {:.0f}", m.latency_p50_us(),
+                                                              m.latency_p99_us())
+                                                : std::string("-");
+  const std::string driver = m.state_known() ? fmt::format("{} phi={}", DriverModeName(m.mode()), Values(m.phi_applied()))
+                                             : std::string("no state");
+  return fmt::format("[{}] summary #{} {} samples in {:.3f} s error_deg={} loop_us={} trail={} {}", Text(m.bench_id()),
+                     m.sequence_number(), m.samples(), m.period_s(), error, latency, m.trail().size() / 6, driver);
 }
 
 std::string ToText(const msg::TargetReply& m) {

@@ -42,6 +42,7 @@ decltype(auto) WithTopicMessage(std::string_view topic, F&& f) {
   if (topic == bus::TopicTraits<msg::DeviceDescription>::kTopic) return f(std::type_identity<msg::DeviceDescription>{});
   if (topic == bus::TopicTraits<msg::Target>::kTopic) return f(std::type_identity<msg::Target>{});
   if (topic == bus::TopicTraits<msg::TargetRequest>::kTopic) return f(std::type_identity<msg::TargetRequest>{});
+  if (topic == bus::TopicTraits<msg::BenchSummary>::kTopic) return f(std::type_identity<msg::BenchSummary>{});
   return f(std::type_identity<msg::TargetReply>{});
 }
 
@@ -59,6 +60,7 @@ nlohmann::ordered_json ToJson(const msg::DeviceDescription& m);
 nlohmann::ordered_json ToJson(const msg::Target& m);
 nlohmann::ordered_json ToJson(const msg::TargetRequest& m);
 nlohmann::ordered_json ToJson(const msg::TargetReply& m);
+nlohmann::ordered_json ToJson(const msg::BenchSummary& m);
 
 /// One readable line with the important fields and their units.
 std::string ToText(const msg::StokesSample& m);
@@ -69,6 +71,7 @@ std::string ToText(const msg::DeviceDescription& m);
 std::string ToText(const msg::Target& m);
 std::string ToText(const msg::TargetRequest& m);
 std::string ToText(const msg::TargetReply& m);
+std::string ToText(const msg::BenchSummary& m);
 
 /// "[+0.0000, +0.6000, +0.8000]" with `decimals` digits.
 std::string FormatValues(const double* values, size_t count, int decimals = 4);

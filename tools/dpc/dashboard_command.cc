@@ -345,21 +345,14 @@ cli::ExitCode RunDashboardCommand(const DashboardOptions& o) {
           if (!problem.empty()) return model.OnRefused("dpc_device_description", problem);
           model.OnDevice(read);
         });
-    BenchSample sample;
-    auto samples = participant.MakeReader<msg::StokesSample>(bench, [&](const msg::StokesSample& m, const fdds::SampleInfo&) {
-      std::lock_guard<std::mutex> lock(mutex);
-      std::string problem = bus::ReadSample(m, &sample);
-      if (!problem.empty()) return model.OnRefused("dpc_stokes_sample", problem);
-      model.OnSample(sample);
-    });
-    DriverState state;
-    auto states = participant.MakeReader<msg::WaveplateState>(
-        bench, [&](const msg::WaveplateState& m, const fdds::SampleInfo&) {
+    // The bench through the polarimeter's summaries, never at its own rate.
+    BenchSummary summary;
+    auto summaries = participant.MakeReader<msg::BenchSummary>(
+        bench, [&](const msg::BenchSummary& m, const fdds::SampleInfo&) {
           std::lock_guard<std::mutex> lock(mutex);
-          const int controls = static_cast<int>(std::min<size_t>(m.phi_applied().size(), msg::MAX_CONTROLS));
-          std::string problem = bus::ReadState(m, controls, &state);
-          if (!problem.empty()) return model.OnRefused("dpc_waveplate_state", problem);
-          model.OnState(state);
+          std::string problem = bus::ReadSummary(m, &summary);
+          if (!problem.empty()) return model.OnRefused("dpc_bench_summary", problem);
+          model.OnSummary(summary, now_s());
         });
     auto statuses = participant.MakeReader<msg::ControllerStatus>(
         bench, [&](const msg::ControllerStatus& m, const fdds::SampleInfo&) {

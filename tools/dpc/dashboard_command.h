@@ -4,7 +4,8 @@
 //   dpc dashboard [--port 8080] [--bind 127.0.0.1] [--domain N] [--bench-id ID]
 //                 [--push-hz 20] [--lock-threshold-deg 10] [--assets DIR] [--duration-s T]
 //
-// Subscribes to every topic of one bench (as `dpc monitor` does) and serves a page
+// Subscribes to the low-rate topics of one bench (the polarimeter's summaries, 20 a second, the
+// controllers' status, the target, the device; never the samples or the states) and serves a page
 // (tools/dpc/dashboard/web, with three.js and uPlot copied from npm at build time: nothing is
 // fetched at run time) that shows the Poincaré sphere with S_in, S_out and the target, the error
 // and extinction against time with the lock threshold and a LOCKED / LOST / HOLDING badge, φ per

@@ -13,13 +13,6 @@ constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 nlohmann::json Triple(const Vector3& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
 
-/// The value at quantile q of `sorted` (nearest rank).
-double Quantile(const std::vector<double>& sorted, double q) {
-  if (sorted.empty()) return 0.0;
-  const auto rank = static_cast<size_t>(std::ceil(q * static_cast<double>(sorted.size())));
-  return sorted[std::min(sorted.size() - 1, rank == 0 ? 0 : rank - 1)];
-}
-
 }  // namespace
 
 double ExtinctionDb(double error_deg, double floor_db) {
@@ -30,58 +23,27 @@ double ExtinctionDb(double error_deg, double floor_db) {
   return std::max(floor_db, 20.0 * std::log10(t));
 }
 
-DashboardModel::DashboardModel(DashboardModelOptions options) : options_(options) {
-  options_.max_trail_points = std::max<size_t>(2, options_.max_trail_points);
-  options_.max_latencies = std::max<size_t>(2, options_.max_latencies);
-  trail_.reserve(2 * options_.max_trail_points);
-  period_latencies_us_.reserve(options_.max_latencies);
-}
+DashboardModel::DashboardModel(DashboardModelOptions options) : options_(options) {}
 
-void DashboardModel::OnSample(const BenchSample& sample) {
-  // A sample numbered at or before the last one is a new bench run (the polarimeter restarted).
-  ++period_samples_;
-  ++total_samples_;
-  last_sample_ = sample;
-  PushTrail(sample);
-  if (!built_target_) return;
-  const double error_deg = built_target_->DistanceRad(sample.s_out) * kDegPerRad;
-  if (!std::isfinite(error_deg)) return;
-  ++period_errors_;
-  period_error_sum_deg_ += error_deg;
-  period_error_max_deg_ = period_errors_ == 1 ? error_deg : std::max(period_error_max_deg_, error_deg);
-}
-
-void DashboardModel::PushTrail(const BenchSample& sample) {
-  if (trail_counter_++ % trail_stride_ != 0) return;
-  trail_.push_back({sample.s_in.x(), sample.s_in.y(), sample.s_in.z(), sample.s_out.x(), sample.s_out.y(),
-                    sample.s_out.z()});
-  if (trail_.size() >= 2 * options_.max_trail_points) {
-    // Keep every other point and take every other sample from now on.
-    size_t kept = 0;
-    for (size_t i = 0; i < trail_.size(); i += 2) trail_[kept++] = trail_[i];
-    trail_.resize(kept);
-    trail_stride_ *= 2;
+void DashboardModel::OnSummary(const BenchSummary& summary, double now_s) {
+  if (latest_ && summary.sequence <= latest_->sequence && summary.publish_time_ns <= latest_->publish_time_ns) {
+    return;  // an old one arriving late (a restarted polarimeter numbers from 1 again, later)
   }
-}
-
-void DashboardModel::OnState(const DriverState& state) {
-  // The loop latency of each newly answered sample: from the sample's publication to the state
-  // answering it, both stamped on the bench (the polarimeter's and the driver's wall clocks).
-  if (state.answers_sample != 0 && state.answers_sample != last_latency_sample_ &&
-      state.sample_publish_time_ns > 0 && state.publish_time_ns >= state.sample_publish_time_ns) {
-    last_latency_sample_ = state.answers_sample;
-    const double latency_us = static_cast<double>(state.publish_time_ns - state.sample_publish_time_ns) / 1e3;
-    if (latency_us < 1e7 && latency_counter_++ % latency_stride_ == 0) {
-      period_latencies_us_.push_back(latency_us);
-      if (period_latencies_us_.size() >= options_.max_latencies) {
-        size_t kept = 0;
-        for (size_t i = 0; i < period_latencies_us_.size(); i += 2) period_latencies_us_[kept++] = period_latencies_us_[i];
-        period_latencies_us_.resize(kept);
-        latency_stride_ *= 2;
-      }
-    }
+  ++summaries_;
+  period_samples_ += summary.samples;
+  period_bench_s_ += summary.period_s;
+  if (summary.error_mean_deg) {
+    period_error_sum_deg_ += *summary.error_mean_deg * static_cast<double>(summary.samples);
+    period_errors_ += summary.samples;
+    period_error_max_deg_ =
+        period_errors_ == summary.samples ? summary.error_max_deg : std::max(period_error_max_deg_, summary.error_max_deg);
   }
-  state_ = state;
+  for (const auto& point : summary.trail) {
+    if (trail_.size() >= 4 * kMaxSummaryTrailPoints) break;  // pushes far slower than summaries
+    trail_.push_back(point);
+  }
+  latest_ = summary;
+  latest_received_s_ = now_s;
 }
 
 void DashboardModel::OnDevice(const DeviceDescription& device) { device_ = device; }
@@ -112,31 +74,37 @@ void DashboardModel::OnRefused(const std::string& topic, const std::string& prob
 
 nlohmann::json DashboardModel::TakeSnapshot(double now_s) {
   using nlohmann::json;
-  const double period_s = last_snapshot_s_ ? std::max(1e-6, now_s - *last_snapshot_s_) : 0.0;
-  last_snapshot_s_ = now_s;
-
   json snapshot = json::object();
   snapshot["type"] = "snapshot";
   snapshot["t_s"] = now_s;
-  snapshot["period_s"] = period_s;
+  const bool fresh = summaries_ > 0;
+  snapshot["fresh"] = fresh;
+  if (fresh) {
+    rate_hz_ = period_bench_s_ > 0 ? std::optional<double>(static_cast<double>(period_samples_) / period_bench_s_)
+                                   : std::nullopt;
+    error_mean_deg_.reset();
+    if (period_errors_ > 0) {
+      error_mean_deg_ = period_error_sum_deg_ / static_cast<double>(period_errors_);
+      error_max_deg_ = period_error_max_deg_;
+    }
+  }
+  const bool stale = !latest_ || now_s - latest_received_s_ > options_.stale_s;
 
   // The loop's condition, as dpc monitor says it.
-  std::optional<double> error_mean_deg;
-  if (period_errors_ > 0) error_mean_deg = period_error_sum_deg_ / static_cast<double>(period_errors_);
   std::string condition;
-  const bool holding = state_ && state_->mode == DriverMode::kHolding;
-  if (total_samples_ == 0 && !state_) {
+  const bool holding = latest_ && latest_->state && latest_->state->mode == DriverMode::kHolding;
+  if (!latest_) {
     condition = "WAITING";
-  } else if (period_samples_ == 0) {
+  } else if (stale || (fresh && period_samples_ == 0)) {
     condition = "NO SAMPLES";
   } else if (holding) {
     condition = "HOLDING";
-  } else if (error_mean_deg && *error_mean_deg < options_.lock_threshold_deg) {
+  } else if (error_mean_deg_ && *error_mean_deg_ < options_.lock_threshold_deg) {
     condition = "LOCKED";
-  } else if (error_mean_deg) {
+  } else if (error_mean_deg_) {
     condition = "LOST";
   } else {
-    condition = "WAITING";  // samples, but no target yet
+    condition = condition_ == "NO SAMPLES" ? "WAITING" : condition_;
   }
   if (condition != condition_) {
     condition_ = condition;
@@ -145,30 +113,28 @@ nlohmann::json DashboardModel::TakeSnapshot(double now_s) {
   snapshot["condition"] = condition_;
   snapshot["condition_for_s"] = now_s - condition_since_s_;
   snapshot["lock_threshold_deg"] = options_.lock_threshold_deg;
+  snapshot["summary_age_s"] = latest_ ? json(now_s - latest_received_s_) : json(nullptr);
 
-  snapshot["samples"] = {{"total", total_samples_},
+  snapshot["samples"] = {{"last", latest_ ? latest_->last_sample : 0},
                          {"period", period_samples_},
-                         {"rate_hz", period_s > 0 ? static_cast<double>(period_samples_) / period_s : 0.0}};
-  if (error_mean_deg) {
-    snapshot["error_deg"] = {{"mean", *error_mean_deg}, {"max", period_error_max_deg_}};
-    snapshot["extinction_db"] = ExtinctionDb(*error_mean_deg);
+                         {"rate_hz", !stale && rate_hz_ ? *rate_hz_ : 0.0}};
+  if (error_mean_deg_ && !stale) {
+    snapshot["error_deg"] = {{"mean", *error_mean_deg_}, {"max", error_max_deg_}};
+    snapshot["extinction_db"] = ExtinctionDb(*error_mean_deg_);
   } else {
     snapshot["error_deg"] = nullptr;
     snapshot["extinction_db"] = nullptr;
   }
-  if (last_sample_) {
-    snapshot["s_in"] = Triple(last_sample_->s_in);
-    snapshot["s_out"] = Triple(last_sample_->s_out);
-    snapshot["sample_sequence"] = last_sample_->sequence;
+  if (latest_ && latest_->last_sample != 0) {
+    snapshot["s_in"] = Triple(latest_->s_in);
+    snapshot["s_out"] = Triple(latest_->s_out);
   } else {
     snapshot["s_in"] = nullptr;
     snapshot["s_out"] = nullptr;
   }
   json trail_in = json::array();
   json trail_out = json::array();
-  const size_t step = trail_.size() > options_.max_trail_points ? 2 : 1;
-  for (size_t i = 0; i < trail_.size(); i += step) {
-    const auto& p = trail_[i];
+  for (const auto& p : trail_) {
     trail_in.push_back({p[0], p[1], p[2]});
     trail_out.push_back({p[3], p[4], p[5]});
   }
@@ -215,20 +181,24 @@ nlohmann::json DashboardModel::TakeSnapshot(double now_s) {
     snapshot["device"] = nullptr;
   }
 
-  if (state_) {
+  const DriverState* state = latest_ && latest_->state ? &*latest_->state : nullptr;
+  if (state != nullptr) {
     json saturated = json::array();
-    for (int i = 0; i < state_->control_count(); ++i) saturated.push_back(state_->saturated[static_cast<size_t>(i)]);
-    snapshot["driver"] = {{"mode", state_->mode == DriverMode::kActive ? "ACTIVE" : "HOLDING"},
-                          {"reason", state_->reason},
-                          {"obeyed_id", state_->obeyed_controller_id},
-                          {"obeyed_priority", state_->obeyed_priority},
-                          {"phi", state_->motion.phi},
+    json phi = json::array();
+    for (int i = 0; i < state->control_count(); ++i) {
+      saturated.push_back(state->saturated[static_cast<size_t>(i)]);
+      phi.push_back(state->motion.phi[i]);
+    }
+    snapshot["driver"] = {{"mode", state->mode == DriverMode::kActive ? "ACTIVE" : "HOLDING"},
+                          {"reason", state->reason},
+                          {"obeyed_id", state->obeyed_controller_id},
+                          {"obeyed_priority", state->obeyed_priority},
+                          {"phi", std::move(phi)},
                           {"saturated", std::move(saturated)},
-                          {"commands_applied", state_->commands_applied},
-                          {"commands_rejected", state_->commands_rejected},
-                          {"commands_limited", state_->commands_limited},
-                          {"controller_switches", state_->controller_switches},
-                          {"last_rejection", state_->last_rejection}};
+                          {"commands_applied", state->commands_applied},
+                          {"commands_rejected", state->commands_rejected},
+                          {"commands_limited", state->commands_limited},
+                          {"controller_switches", state->controller_switches}};
   } else {
     snapshot["driver"] = nullptr;
   }
@@ -239,7 +209,7 @@ nlohmann::json DashboardModel::TakeSnapshot(double now_s) {
     controllers.push_back({{"id", id},
                            {"priority", s.priority},
                            {"law", s.law},
-                           {"obeyed", state_ && state_->mode == DriverMode::kActive && state_->obeyed_controller_id == id},
+                           {"obeyed", state != nullptr && state->mode == DriverMode::kActive && state->obeyed_controller_id == id},
                            {"condition", s.condition},
                            {"error_deg", s.error_deg},
                            {"sigma_min", s.sigma_min},
@@ -252,12 +222,12 @@ nlohmann::json DashboardModel::TakeSnapshot(double now_s) {
   }
   snapshot["controllers"] = std::move(controllers);
 
-  if (!period_latencies_us_.empty()) {
-    std::sort(period_latencies_us_.begin(), period_latencies_us_.end());
-    snapshot["loop_latency_us"] = {{"p50", Quantile(period_latencies_us_, 0.50)},
-                                   {"p90", Quantile(period_latencies_us_, 0.90)},
-                                   {"p99", Quantile(period_latencies_us_, 0.99)},
-                                   {"max", period_latencies_us_.back()}};
+  if (latest_ && latest_->latencies > 0 && !stale) {
+    snapshot["loop_latency_us"] = {{"p50", latest_->latency_p50_us},
+                                   {"p90", latest_->latency_p90_us},
+                                   {"p99", latest_->latency_p99_us},
+                                   {"max", latest_->latency_max_us},
+                                   {"count", latest_->latencies}};
   } else {
     snapshot["loop_latency_us"] = nullptr;
   }
@@ -265,19 +235,14 @@ nlohmann::json DashboardModel::TakeSnapshot(double now_s) {
   for (const auto& [topic, count] : refused_) refused[topic] = count;
   snapshot["refused"] = {{"by_topic", std::move(refused)}, {"last", last_refusal_}};
 
-  // A new period. The trail's stride relaxes when the rate fell.
-  const size_t trail_points = trail_.size();
-  trail_.clear();
-  trail_counter_ = 0;
-  if (trail_points < options_.max_trail_points / 2 && trail_stride_ > 1) trail_stride_ /= 2;
+  // A new period.
+  summaries_ = 0;
   period_samples_ = 0;
+  period_bench_s_ = 0.0;
   period_errors_ = 0;
   period_error_sum_deg_ = 0.0;
   period_error_max_deg_ = 0.0;
-  const size_t latencies = period_latencies_us_.size();
-  period_latencies_us_.clear();
-  latency_counter_ = 0;
-  if (latencies < options_.max_latencies / 2 && latency_stride_ > 1) latency_stride_ /= 2;
+  trail_.clear();
   return snapshot;
 }
 

@@ -1,11 +1,12 @@
 #pragma once
-// What `dpc dashboard` shows, folded from the bench's messages (already read and checked at the
-// edge by bus::Read*, so every number here is finite) into one JSON snapshot per push.
+// What `dpc dashboard` shows, folded from the bench's low-rate topics (already read and checked
+// at the edge by bus::Read*, so every number here is finite) into one JSON snapshot per push.
 //
-// The page never sees the bench's rate: a snapshot carries the period's statistics (mean and
-// largest error, sample rate, loop-latency percentiles) and at most `max_trail_points` S_in/S_out
-// points spread evenly over the period (the sampling stride adapts to the rate), so a 10-kHz
-// bench and a 50-Hz one cost the page the same.
+// The bench's rate never reaches the dashboard: the polarimeter's summaries (dpc_bench_summary,
+// 20 a second: the period's sample count, mean and largest error, loop-latency percentiles, at
+// most 48 S_in/S_out points spread over the period, the driver's latest state) carry it. A
+// dashboard subscribed to every sample and state of a 10-kHz bench cost the bench two datagrams
+// a sample and the machine ~60 % of a core.
 //
 // Not thread-safe: the command guards it with a mutex. No DDS here, so that it can be tested.
 
@@ -19,6 +20,7 @@
 #include <vector>
 
 #include "dpc/bench/bench_messages.h"
+#include "dpc/bench/bench_summary.h"
 #include "dpc/control/target.h"
 
 namespace dpc::tools {
@@ -30,24 +32,23 @@ double ExtinctionDb(double error_deg, double floor_db = -80.0);
 
 struct DashboardModelOptions {
   double lock_threshold_deg = 10.0;
-  size_t max_trail_points = 48;   ///< S_in/S_out points per snapshot
-  size_t max_latencies = 4096;    ///< loop latencies kept per period (decimated beyond)
+  double stale_s = 1.0;  ///< no summary for this long: NO SAMPLES (the bench stopped)
 };
 
 class DashboardModel {
  public:
   explicit DashboardModel(DashboardModelOptions options = {});
 
-  void OnSample(const BenchSample& sample);
-  void OnState(const DriverState& state);
+  /// A summary of the bench received at `now_s` (seconds on the caller's monotonic clock).
+  void OnSummary(const BenchSummary& summary, double now_s);
   void OnDevice(const DeviceDescription& device);
   void OnTarget(const BenchTarget& target);
   void OnStatus(const ControllerStatusReport& status, double now_s);
   /// A message that failed its checks at the edge (never shown, only counted).
   void OnRefused(const std::string& topic, const std::string& problem);
 
-  /// The snapshot at `now_s` (seconds on the caller's monotonic clock) for the period since the
-  /// previous call; starts a new period.
+  /// The snapshot at `now_s` for the period since the previous call (`fresh`: summaries arrived
+  /// in it; the page plots only fresh ones); starts a new period.
   nlohmann::json TakeSnapshot(double now_s);
 
   /// The condition the latest snapshot reported ("LOCKED", "LOST", "HOLDING", "NO SAMPLES",
@@ -55,9 +56,7 @@ class DashboardModel {
   const std::string& condition() const { return condition_; }
 
  private:
-  void PushTrail(const BenchSample& sample);
   DashboardModelOptions options_;
-  std::optional<double> last_snapshot_s_;
   std::string condition_ = "WAITING";
   double condition_since_s_ = 0.0;
 
@@ -65,23 +64,21 @@ class DashboardModel {
   std::optional<Target> built_target_;  ///< target_, built once
   std::optional<DeviceDescription> device_;
 
-  // The current period.
-  int64_t period_samples_ = 0;
-  int64_t period_errors_ = 0;
-  double period_error_sum_deg_ = 0.0;
+  // The summaries of the current period, folded.
+  int summaries_ = 0;
+  uint64_t period_samples_ = 0;
+  double period_bench_s_ = 0.0;       ///< the summaries' own periods, summed
+  uint64_t period_errors_ = 0;        ///< samples behind the error figures
+  double period_error_sum_deg_ = 0.0; ///< mean × samples, summed
   double period_error_max_deg_ = 0.0;
-  std::vector<double> period_latencies_us_;
-  int64_t latency_stride_ = 1;
-  int64_t latency_counter_ = 0;
-  // The trail: every stride-th sample, the stride doubled when the buffer fills.
   std::vector<std::array<double, 6>> trail_;
-  int64_t trail_stride_ = 1;
-  int64_t trail_counter_ = 0;
+  // The latest summary (kept across periods).
+  std::optional<BenchSummary> latest_;
+  double latest_received_s_ = 0.0;
+  std::optional<double> rate_hz_;
+  std::optional<double> error_mean_deg_;
+  double error_max_deg_ = 0.0;
 
-  int64_t total_samples_ = 0;
-  std::optional<BenchSample> last_sample_;
-  std::optional<DriverState> state_;
-  uint64_t last_latency_sample_ = 0;
   struct Controller {
     ControllerStatusReport status;
     double received_s = 0.0;

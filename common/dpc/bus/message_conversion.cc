@@ -445,3 +445,124 @@ msg::ControllerStatus StatusMessage(const ControllerStatusReport& status, const 
 }
 
 }  // namespace dpc::bus
+
+namespace dpc::bus {
+
+void WriteSummary(const BenchSummary& summary, const std::string& bench_id, msg::BenchSummary* out) {
+  out->bench_id(bench_id);
+  out->sequence_number(summary.sequence);
+  out->publish_time_ns(summary.publish_time_ns);
+  out->period_s(summary.period_s);
+  out->samples(summary.samples);
+  out->last_sample(summary.last_sample);
+  out->s_in(ToArray(summary.s_in));
+  out->s_out(ToArray(summary.s_out));
+  out->trail().clear();
+  for (size_t i = 0; i < summary.trail.size() && i < kMaxSummaryTrailPoints; ++i) {
+    out->trail().insert(out->trail().end(), summary.trail[i].begin(), summary.trail[i].end());
+  }
+  out->error_known(summary.error_mean_deg.has_value());
+  out->error_mean_deg(summary.error_mean_deg.value_or(0.0));
+  out->error_max_deg(summary.error_mean_deg ? summary.error_max_deg : 0.0);
+  out->latencies(summary.latencies);
+  out->latency_p50_us(summary.latency_p50_us);
+  out->latency_p90_us(summary.latency_p90_us);
+  out->latency_p99_us(summary.latency_p99_us);
+  out->latency_max_us(summary.latency_max_us);
+  out->state_known(summary.state.has_value());
+  if (summary.state) {
+    const DriverState& state = *summary.state;
+    out->mode(state.mode == DriverMode::kActive ? msg::DRIVER_ACTIVE : msg::DRIVER_HOLDING);
+    out->reason(state.reason.substr(0, 255));
+    out->obeyed_controller_id(state.obeyed_controller_id.substr(0, 63));
+    out->obeyed_priority(state.obeyed_priority);
+    out->phi_applied().assign(state.motion.phi.data(), state.motion.phi.data() + state.motion.phi.size());
+    out->saturated().assign(state.saturated.begin(), state.saturated.begin() + state.control_count());
+    out->commands_applied(state.commands_applied);
+    out->commands_rejected(state.commands_rejected);
+    out->commands_limited(state.commands_limited);
+    out->controller_switches(state.controller_switches);
+  } else {
+    out->mode(msg::DRIVER_HOLDING);
+    out->reason("");
+    out->obeyed_controller_id("");
+    out->obeyed_priority(0);
+    out->phi_applied().clear();
+    out->saturated().clear();
+    out->commands_applied(0);
+    out->commands_rejected(0);
+    out->commands_limited(0);
+    out->controller_switches(0);
+  }
+}
+
+std::string ReadSummary(const msg::BenchSummary& m, BenchSummary* out) {
+  const double figures[] = {m.period_s(),       m.error_mean_deg(), m.error_max_deg(),  m.latency_p50_us(),
+                            m.latency_p90_us(), m.latency_p99_us(), m.latency_max_us()};
+  for (double v : figures) {
+    if (!std::isfinite(v) || v < 0.0) return fmt::format("a figure is {} (negative or not finite)", v);
+  }
+  if (m.sequence_number() == 0) return "sequence_number 0";
+  if (m.last_sample() != 0) {
+    if (std::string reason = CheckUnitStokes(m.s_in(), "s_in"); !reason.empty()) return reason;
+    if (std::string reason = CheckUnitStokes(m.s_out(), "s_out"); !reason.empty()) return reason;
+  }
+  if (m.trail().size() % 6 != 0 || m.trail().size() > 6 * kMaxSummaryTrailPoints) {
+    return fmt::format("the trail has {} values, not whole points of 6 (at most {})", m.trail().size(),
+                       6 * kMaxSummaryTrailPoints);
+  }
+  for (size_t i = 0; i < m.trail().size(); i += 3) {
+    const std::array<double, 3> point{m.trail()[i], m.trail()[i + 1], m.trail()[i + 2]};
+    if (std::string reason = CheckUnitStokes(point, "trail"); !reason.empty()) return reason;
+  }
+  if (m.state_known()) {
+    if (m.phi_applied().size() > msg::MAX_CONTROLS) return "phi_applied: more values than any device has (oversized)";
+    if (std::string reason = CheckFinite(m.phi_applied(), "phi_applied"); !reason.empty()) return reason;
+    if (m.saturated().size() != m.phi_applied().size()) {
+      return fmt::format("saturated has {} values, phi_applied {}", m.saturated().size(), m.phi_applied().size());
+    }
+    if (m.mode() != msg::DRIVER_ACTIVE && m.mode() != msg::DRIVER_HOLDING) {
+      return fmt::format("mode {} is not a driver mode", static_cast<int>(m.mode()));
+    }
+  }
+  out->sequence = m.sequence_number();
+  out->publish_time_ns = m.publish_time_ns();
+  out->period_s = m.period_s();
+  out->samples = m.samples();
+  out->last_sample = m.last_sample();
+  out->s_in = ToStokes(m.s_in());
+  out->s_out = ToStokes(m.s_out());
+  out->trail.clear();
+  for (size_t i = 0; i < m.trail().size(); i += 6) {
+    out->trail.push_back({m.trail()[i], m.trail()[i + 1], m.trail()[i + 2], m.trail()[i + 3], m.trail()[i + 4],
+                          m.trail()[i + 5]});
+  }
+  out->error_mean_deg.reset();
+  if (m.error_known()) out->error_mean_deg = m.error_mean_deg();
+  out->error_max_deg = m.error_max_deg();
+  out->latencies = m.latencies();
+  out->latency_p50_us = m.latency_p50_us();
+  out->latency_p90_us = m.latency_p90_us();
+  out->latency_p99_us = m.latency_p99_us();
+  out->latency_max_us = m.latency_max_us();
+  out->state.reset();
+  if (m.state_known()) {
+    DriverState state;
+    const auto controls = static_cast<Eigen::Index>(m.phi_applied().size());
+    state.motion = WaveplateMotion::Still(ControlVector::Zero(controls));
+    for (Eigen::Index i = 0; i < controls; ++i) state.motion.phi[i] = m.phi_applied()[static_cast<size_t>(i)];
+    for (size_t i = 0; i < m.saturated().size(); ++i) state.saturated[i] = m.saturated()[i];
+    state.mode = m.mode() == msg::DRIVER_ACTIVE ? DriverMode::kActive : DriverMode::kHolding;
+    state.reason = m.reason().to_string();
+    state.obeyed_controller_id = m.obeyed_controller_id().to_string();
+    state.obeyed_priority = m.obeyed_priority();
+    state.commands_applied = m.commands_applied();
+    state.commands_rejected = m.commands_rejected();
+    state.commands_limited = m.commands_limited();
+    state.controller_switches = m.controller_switches();
+    out->state = std::move(state);
+  }
+  return {};
+}
+
+}  // namespace dpc::bus

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "dpc/bench/bench_messages.h"
+#include "dpc/bench/bench_summary.h"
 #include "dpc/config/scenario_config.h"
 #include "dpc/msg/bench.h"
 #include "dpc/optics/stokes.h"
@@ -62,6 +63,13 @@ std::string ReadTarget(const msg::Target& message, BenchTarget* out);
 TargetConfig TargetFromRequest(const msg::TargetRequest& request);
 
 msg::ControllerStatus StatusMessage(const ControllerStatusReport& status, const std::string& bench_id);
+
+/// Writes a summary into `out` (strings cut to their bounds, the trail to its bound).
+void WriteSummary(const BenchSummary& summary, const std::string& bench_id, msg::BenchSummary* out);
+/// Reads a summary into `out`: empty if it is usable (finite figures, unit S_in/S_out and trail
+/// points, a trail of whole points, the state's φ and saturation of one size within
+/// msg::MAX_CONTROLS, a known mode); else why not.
+std::string ReadSummary(const msg::BenchSummary& message, BenchSummary* out);
 
 inline StokesVector ToStokes(const std::array<double, 3>& s) { return StokesVector(s[0], s[1], s[2]); }
 inline std::array<double, 3> ToArray(const Vector3& v) { return {v.x(), v.y(), v.z()}; }

@@ -11,6 +11,7 @@
 // | dpc_target             | Target             | driver               | reliable, transient local         |
 // | dpc_target_request     | TargetRequest      | dpc target           | reliable, volatile                |
 // | dpc_target_reply       | TargetReply        | driver               | reliable, volatile                |
+// | dpc_bench_summary      | BenchSummary       | polarimeter          | reliable, keep last 1, deadline   |
 //
 // Every profile is named "<topic>.writer" / "<topic>.reader"; data-sharing is off in all of them.
 //
@@ -71,6 +72,7 @@ DPC_BUS_TOPIC(DeviceDescription, "dpc_device_description", false);
 DPC_BUS_TOPIC(Target, "dpc_target", false);
 DPC_BUS_TOPIC(TargetRequest, "dpc_target_request", false);
 DPC_BUS_TOPIC(TargetReply, "dpc_target_reply", false);
+DPC_BUS_TOPIC(BenchSummary, "dpc_bench_summary", false);
 
 #undef DPC_BUS_TOPIC
 

@@ -315,3 +315,86 @@ TEST(StatusMessage, CarriesEveryFieldCutToTheWireBounds) {
 
 }  // namespace
 }  // namespace dpc::bus
+
+namespace dpc::bus {
+namespace {
+
+BenchSummary ASummary() {
+  BenchSummary s;
+  s.sequence = 7;
+  s.publish_time_ns = 123;
+  s.period_s = 0.05;
+  s.samples = 500;
+  s.last_sample = 3500;
+  s.s_in = StokesVector(1.0, 0.0, 0.0);
+  s.s_out = StokesVector(0.0, 0.6, 0.8);
+  s.trail = {{1, 0, 0, 0, 0.6, 0.8}, {0, 1, 0, 0, 0, 1}};
+  s.error_mean_deg = 1.25;
+  s.error_max_deg = 2.5;
+  s.latencies = 500;
+  s.latency_p50_us = 210;
+  s.latency_p90_us = 300;
+  s.latency_p99_us = 800;
+  s.latency_max_us = 1500;
+  DriverState state;
+  state.motion = WaveplateMotion::Still(ControlVector::Zero(3));
+  state.motion.phi << 0.5, -0.25, 1.0;
+  state.saturated[2] = true;
+  state.mode = DriverMode::kHolding;
+  state.reason = "no controller";
+  state.controller_switches = 4;
+  s.state = state;
+  return s;
+}
+
+TEST(ReadSummary, RoundTripsWhatTheDashboardShows) {
+  msg::BenchSummary message;
+  WriteSummary(ASummary(), "bench1", &message);
+  BenchSummary read;
+  ASSERT_EQ(ReadSummary(message, &read), "");
+  EXPECT_EQ(read.sequence, 7u);
+  EXPECT_EQ(read.samples, 500u);
+  EXPECT_EQ(read.trail.size(), 2u);
+  EXPECT_DOUBLE_EQ(read.trail[1][5], 1.0);
+  ASSERT_TRUE(read.error_mean_deg);
+  EXPECT_DOUBLE_EQ(*read.error_mean_deg, 1.25);
+  EXPECT_DOUBLE_EQ(read.latency_p99_us, 800);
+  ASSERT_TRUE(read.state);
+  EXPECT_EQ(read.state->control_count(), 3);
+  EXPECT_DOUBLE_EQ(read.state->motion.phi[1], -0.25);
+  EXPECT_TRUE(read.state->saturated[2]);
+  EXPECT_EQ(read.state->mode, DriverMode::kHolding);
+  EXPECT_EQ(read.state->reason, "no controller");
+  EXPECT_EQ(read.state->controller_switches, 4u);
+
+  BenchSummary empty;
+  empty.sequence = 1;
+  WriteSummary(empty, "bench1", &message);
+  ASSERT_EQ(ReadSummary(message, &read), "");
+  EXPECT_FALSE(read.error_mean_deg);
+  EXPECT_FALSE(read.state);
+  EXPECT_TRUE(read.trail.empty());
+}
+
+TEST(ReadSummary, NamesWhatIsWrong) {
+  const auto problem = [](auto&& spoil) {
+    msg::BenchSummary message;
+    WriteSummary(ASummary(), "bench1", &message);
+    spoil(message);
+    BenchSummary read;
+    return ReadSummary(message, &read);
+  };
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(problem([&](auto& m) { m.error_mean_deg(nan); }).find("not finite"), std::string::npos);
+  EXPECT_NE(problem([](auto& m) { m.latency_p99_us(-1.0); }).find("negative"), std::string::npos);
+  EXPECT_NE(problem([](auto& m) { m.s_out({0.0, 2.0, 0.0}); }).find("s_out"), std::string::npos);
+  EXPECT_NE(problem([](auto& m) { m.trail().push_back(1.0); }).find("whole points"), std::string::npos);
+  EXPECT_NE(problem([](auto& m) { m.trail()[3] = 5.0; }).find("trail"), std::string::npos);
+  EXPECT_NE(problem([](auto& m) { m.saturated().pop_back(); }).find("saturated"), std::string::npos);
+  EXPECT_NE(problem([&](auto& m) { m.phi_applied()[0] = nan; }).find("phi_applied"), std::string::npos);
+  EXPECT_NE(problem([](auto& m) { m.mode(static_cast<msg::DriverMode>(7)); }).find("mode 7"), std::string::npos);
+  EXPECT_NE(problem([](auto& m) { m.sequence_number(0); }).find("sequence_number"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace dpc::bus

@@ -52,9 +52,11 @@ TEST(IdlFields, ReadsTheFieldsOfAStructInOrder) {
   EXPECT_EQ(IdlFields("StokesSample").size(), 9u);
 }
 
-TEST(BenchTopics, ListsTheEightTopicsInTheOrderOfTopicsH) {
+TEST(BenchTopics, ListsTheNineTopicsInTheOrderOfTopicsH) {
   const auto& topics = BenchTopics();
-  ASSERT_EQ(topics.size(), 8u);
+  ASSERT_EQ(topics.size(), 9u);
+  EXPECT_EQ(topics[8].name, "dpc_bench_summary");
+  EXPECT_EQ(topics[8].alias, "summary");
   EXPECT_EQ(topics[0].name, "dpc_stokes_sample");
   EXPECT_EQ(topics[0].alias, "sample");
   EXPECT_EQ(topics[0].type_name, "dpc::msg::StokesSample");
@@ -325,6 +327,34 @@ TEST(TargetReplyMessage, JsonHasEveryFieldAndTextSaysAcceptedOrRefused) {
   m.accepted(true);
   m.revision(3);
   EXPECT_TRUE(Contains(ToText(m), "accepted revision 3")) << ToText(m);
+}
+
+}  // namespace
+}  // namespace dpc::tools
+
+namespace dpc::tools {
+namespace {
+
+TEST(BenchSummaryMessage, JsonHasEveryFieldAndTextSaysTheErrorAndTheDriver) {
+  msg::BenchSummary m;
+  m.bench_id("b1");
+  m.sequence_number(9);
+  m.samples(500);
+  m.period_s(0.05);
+  m.trail({1, 0, 0, 0, 0.6, 0.8});
+  m.error_known(true);
+  m.error_mean_deg(1.5);
+  m.error_max_deg(3.25);
+  m.state_known(true);
+  m.mode(msg::DRIVER_ACTIVE);
+  m.phi_applied({0.1, -0.2});
+  m.saturated({false, true});
+  const Json json = ToJson(m);
+  EXPECT_EQ(Keys(json), IdlFields("BenchSummary"));
+  EXPECT_EQ(json["saturated"], Json::parse("[false, true]"));
+  const std::string text = ToText(m);
+  EXPECT_TRUE(Contains(text, "[b1] summary #9 500 samples in 0.050 s error_deg=1.500 (max 3.250)")) << text;
+  EXPECT_TRUE(Contains(text, "trail=1 DRIVER_ACTIVE")) << text;
 }
 
 }  // namespace

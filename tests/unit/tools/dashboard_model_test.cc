@@ -1,6 +1,5 @@
-// What the dashboard's page is sent: the loop's condition, the period's error and extinction,
-// a bounded trail whatever the rate, the target with its revision exact, the driver and the
-// controllers.
+// What the dashboard's page is sent: the loop's condition, the period's error and extinction
+// from the bench's summaries, the target with its revision exact, the driver and the controllers.
 #include "dashboard_model.h"
 
 #include <gtest/gtest.h>
@@ -8,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+#include <optional>
 
 #include "dashboard_command.h"
 
@@ -22,32 +22,33 @@ BenchTarget PointTarget(uint64_t revision) {
   return t;
 }
 
-BenchSample Sample(uint64_t sequence, const StokesVector& s_out) {
-  BenchSample s;
+/// A summary of `samples` samples over 50 ms with this mean and largest error.
+BenchSummary Summary(uint64_t sequence, uint64_t samples, std::optional<double> error_mean_deg, double error_max_deg = 0,
+                     std::optional<DriverMode> mode = DriverMode::kActive) {
+  BenchSummary s;
   s.sequence = sequence;
+  s.publish_time_ns = static_cast<int64_t>(sequence) * 50'000'000;
+  s.period_s = 0.05;
+  s.samples = samples;
+  s.last_sample = sequence * samples;
   s.s_in = StokesVector(1.0, 0.0, 0.0);
-  s.s_out = s_out;
-  return s;
-}
-
-/// The unit vector at `angle_deg` from [0, 0.6, 0.8], turned towards S1.
-StokesVector AtAngleFromTarget(double angle_deg) {
-  const double a = angle_deg * std::numbers::pi / 180.0;
-  return StokesVector(std::sin(a), 0.6 * std::cos(a), 0.8 * std::cos(a));
-}
-
-DriverState State(DriverMode mode, int64_t sample_publish_ns, int64_t publish_ns, uint64_t answers) {
-  DriverState s;
-  s.mode = mode;
-  s.reason = mode == DriverMode::kActive ? "obeying main (priority 10)" : "no controller";
-  s.obeyed_controller_id = mode == DriverMode::kActive ? "main" : "";
-  s.answers_sample = answers;
-  s.sample_publish_time_ns = sample_publish_ns;
-  s.publish_time_ns = publish_ns;
-  s.motion.phi = ControlVector::Zero(3);
-  s.motion.phi << 0.1, -0.2, 0.3;
-  s.motion.rate_per_s = ControlVector::Zero(3);
-  s.saturated[1] = true;
+  s.s_out = StokesVector(0.0, 0.6, 0.8);
+  s.trail = {{1, 0, 0, 0, 0.6, 0.8}, {0, 1, 0, 0, 0.6, 0.8}};
+  s.error_mean_deg = error_mean_deg;
+  s.error_max_deg = error_max_deg;
+  s.latencies = samples;
+  s.latency_p50_us = 200;
+  s.latency_p99_us = 900;
+  if (mode) {
+    DriverState state;
+    state.mode = *mode;
+    state.reason = *mode == DriverMode::kActive ? "obeying main (priority 10)" : "no controller";
+    state.obeyed_controller_id = *mode == DriverMode::kActive ? "main" : "";
+    state.motion = WaveplateMotion::Still(ControlVector::Zero(3));
+    state.motion.phi << 0.1, -0.2, 0.3;
+    state.saturated[1] = true;
+    s.state = state;
+  }
   return s;
 }
 
@@ -58,54 +59,50 @@ TEST(ExtinctionTest, IsTwentyLogTangentOfHalfTheAngle) {
   EXPECT_GT(ExtinctionDb(180.0), 100.0);        // orthogonal: finite, huge
 }
 
-TEST(DashboardModelTest, SaysWaitingUntilSamplesAndATargetArriveThenLockedOrLost) {
-  DashboardModel model(DashboardModelOptions{10.0});
+TEST(DashboardModelTest, SaysWaitingThenLockedOrLostFromTheSummariesOfThePeriod) {
+  DashboardModel model(DashboardModelOptions{10.0, 1.0});
   EXPECT_EQ(model.TakeSnapshot(0.0)["condition"], "WAITING");
-  model.OnTarget(PointTarget((uint64_t{1700000000} << 32) | 1));
-  model.OnSample(Sample(1, AtAngleFromTarget(2.0)));
-  model.OnSample(Sample(2, AtAngleFromTarget(4.0)));
-  const auto locked = model.TakeSnapshot(0.05);
+  // Two summaries in one push period: their errors weighted by their samples.
+  model.OnSummary(Summary(1, 100, 2.0, 4.0), 0.01);
+  model.OnSummary(Summary(2, 300, 6.0, 9.0), 0.06);
+  const auto locked = model.TakeSnapshot(0.1);
   EXPECT_EQ(locked["condition"], "LOCKED");
-  EXPECT_NEAR(locked["error_deg"]["mean"].get<double>(), 3.0, 1e-9);
-  EXPECT_NEAR(locked["error_deg"]["max"].get<double>(), 4.0, 1e-9);
-  EXPECT_NEAR(locked["extinction_db"].get<double>(), ExtinctionDb(3.0), 1e-12);
-  EXPECT_NEAR(locked["samples"]["rate_hz"].get<double>(), 40.0, 1e-9);
+  EXPECT_EQ(locked["fresh"], true);
+  EXPECT_NEAR(locked["error_deg"]["mean"].get<double>(), 5.0, 1e-12);
+  EXPECT_DOUBLE_EQ(locked["error_deg"]["max"].get<double>(), 9.0);
+  EXPECT_NEAR(locked["extinction_db"].get<double>(), ExtinctionDb(5.0), 1e-12);
+  EXPECT_NEAR(locked["samples"]["rate_hz"].get<double>(), 4000.0, 1e-9);  // 400 samples in 2 × 50 ms
+  EXPECT_EQ(locked["trail"]["s_out"].size(), 4u);
+  EXPECT_DOUBLE_EQ(locked["loop_latency_us"]["p99"].get<double>(), 900.0);
 
-  model.OnSample(Sample(3, AtAngleFromTarget(30.0)));
-  const auto lost = model.TakeSnapshot(0.10);
+  // A push with no new summary repeats the figures, not fresh (the page plots nothing new).
+  const auto repeated = model.TakeSnapshot(0.15);
+  EXPECT_EQ(repeated["fresh"], false);
+  EXPECT_EQ(repeated["condition"], "LOCKED");
+  EXPECT_EQ(repeated["trail"]["s_out"].size(), 0u);
+
+  model.OnSummary(Summary(3, 200, 30.0, 40.0), 0.2);
+  const auto lost = model.TakeSnapshot(0.2);
   EXPECT_EQ(lost["condition"], "LOST");
   EXPECT_DOUBLE_EQ(lost["condition_for_s"].get<double>(), 0.0);
-  model.OnSample(Sample(4, AtAngleFromTarget(31.0)));
-  EXPECT_NEAR(model.TakeSnapshot(0.25)["condition_for_s"].get<double>(), 0.15, 1e-12);  // since it began
+  model.OnSummary(Summary(4, 200, 31.0, 40.0), 0.3);
+  EXPECT_NEAR(model.TakeSnapshot(0.35)["condition_for_s"].get<double>(), 0.15, 1e-12);  // since it began
 
-  // No sample in a period: the bench stopped.
-  EXPECT_EQ(model.TakeSnapshot(0.30)["condition"], "NO SAMPLES");
-  // The driver holds: that is what the page says, whatever the error.
-  model.OnState(State(DriverMode::kHolding, 0, 0, 0));
-  model.OnSample(Sample(5, AtAngleFromTarget(1.0)));
-  EXPECT_EQ(model.TakeSnapshot(0.35)["condition"], "HOLDING");
+  // No summary for longer than stale_s: the bench stopped; no figures are shown as current.
+  const auto stopped = model.TakeSnapshot(1.5);
+  EXPECT_EQ(stopped["condition"], "NO SAMPLES");
+  EXPECT_TRUE(stopped["error_deg"].is_null());
+  EXPECT_DOUBLE_EQ(stopped["samples"]["rate_hz"].get<double>(), 0.0);
+  // It comes back, with the driver holding: that is what the page says, whatever the error.
+  model.OnSummary(Summary(5, 100, 1.0, 2.0, DriverMode::kHolding), 1.6);
+  EXPECT_EQ(model.TakeSnapshot(1.6)["condition"], "HOLDING");
 }
 
-TEST(DashboardModelTest, TheTrailStaysBoundedWhateverTheRateAndSpansThePeriod) {
-  DashboardModel model(DashboardModelOptions{10.0, 48});
-  for (int period = 1; period <= 3; ++period) {
-    for (uint64_t i = 1; i <= 10000; ++i) model.OnSample(Sample(i, AtAngleFromTarget(static_cast<double>(i) * 0.01)));
-    const auto snapshot = model.TakeSnapshot(0.05 * period);
-    const auto& trail = snapshot["trail"]["s_out"];
-    EXPECT_LE(trail.size(), 48u);
-    EXPECT_GE(trail.size(), 24u);
-    EXPECT_EQ(snapshot["trail"]["s_in"].size(), trail.size());
-    // The first point is the period's first sample (≈ 0°), the last one from its end.
-    const StokesVector last(trail.back()[0].get<double>(), trail.back()[1].get<double>(), trail.back()[2].get<double>());
-    EXPECT_GT(last.x(), std::sin(60.0 * std::numbers::pi / 180.0));
-  }
-  // A slow bench afterwards: every sample is shown again once the stride relaxes.
-  for (int period = 0; period < 12; ++period) {
-    for (uint64_t i = 1; i <= 5; ++i) model.OnSample(Sample(i, AtAngleFromTarget(1.0)));
-    model.TakeSnapshot(1.0 + period);
-  }
-  for (uint64_t i = 1; i <= 5; ++i) model.OnSample(Sample(i, AtAngleFromTarget(1.0)));
-  EXPECT_EQ(model.TakeSnapshot(20.0)["trail"]["s_out"].size(), 5u);
+TEST(DashboardModelTest, AnOldSummaryArrivingLateChangesNothing) {
+  DashboardModel model;
+  model.OnSummary(Summary(5, 100, 2.0, 3.0), 0.0);
+  model.OnSummary(Summary(4, 100, 50.0, 60.0), 0.01);
+  EXPECT_NEAR(model.TakeSnapshot(0.05)["error_deg"]["mean"].get<double>(), 2.0, 1e-12);
 }
 
 TEST(DashboardModelTest, TheRevisionIsSentExactlyAsTextBecauseItExceedsAJavaScriptNumber) {
@@ -134,23 +131,9 @@ TEST(DashboardModelTest, ASetTargetIsSentNormalized) {
   EXPECT_DOUBLE_EQ(target["offset"].get<double>(), 0.25);
 }
 
-TEST(DashboardModelTest, LoopLatencyPercentilesComeFromEachNewlyAnsweredSample) {
-  DashboardModel model;
-  for (uint64_t i = 1; i <= 100; ++i) {
-    const int64_t published = 1'000'000'000 + static_cast<int64_t>(i) * 1'000'000;
-    model.OnState(State(DriverMode::kActive, published, published + static_cast<int64_t>(i) * 1000, i));
-    model.OnState(State(DriverMode::kActive, published, published + 999'000'000, i));  // a heartbeat: not counted
-  }
-  const auto snapshot = model.TakeSnapshot(1.0);
-  EXPECT_DOUBLE_EQ(snapshot["loop_latency_us"]["p50"].get<double>(), 50.0);
-  EXPECT_DOUBLE_EQ(snapshot["loop_latency_us"]["p99"].get<double>(), 99.0);
-  EXPECT_DOUBLE_EQ(snapshot["loop_latency_us"]["max"].get<double>(), 100.0);
-  EXPECT_TRUE(model.TakeSnapshot(2.0)["loop_latency_us"].is_null());  // a new period
-}
-
 TEST(DashboardModelTest, DriverAndControllersAreShownAndTheObeyedOneMarked) {
   DashboardModel model;
-  model.OnState(State(DriverMode::kActive, 0, 0, 0));
+  model.OnSummary(Summary(1, 10, 1.0, 1.0), 0.0);
   ControllerStatusReport main;
   main.controller_id = "main";
   main.priority = 10;
@@ -161,10 +144,11 @@ TEST(DashboardModelTest, DriverAndControllersAreShownAndTheObeyedOneMarked) {
   standby.controller_id = "standby";
   model.OnStatus(main, 0.5);
   model.OnStatus(standby, 0.2);
-  model.OnRefused("dpc_stokes_sample", "s_out: |S| = 2");
+  model.OnRefused("dpc_bench_summary", "s_out: |S| = 2");
   const auto snapshot = model.TakeSnapshot(1.0);
   EXPECT_EQ(snapshot["driver"]["mode"], "ACTIVE");
   EXPECT_EQ(snapshot["driver"]["phi"].size(), 3u);
+  EXPECT_DOUBLE_EQ(snapshot["driver"]["phi"][1].get<double>(), -0.2);
   EXPECT_EQ(snapshot["driver"]["saturated"][1], true);
   ASSERT_EQ(snapshot["controllers"].size(), 2u);
   EXPECT_EQ(snapshot["controllers"][0]["id"], "main");
@@ -172,7 +156,7 @@ TEST(DashboardModelTest, DriverAndControllersAreShownAndTheObeyedOneMarked) {
   EXPECT_EQ(snapshot["controllers"][1]["obeyed"], false);
   EXPECT_NEAR(snapshot["controllers"][1]["silent_s"].get<double>(), 0.8, 1e-12);
   EXPECT_NEAR(snapshot["controllers"][0]["compute_mean_us"].get<double>(), 1.5, 1e-9);
-  EXPECT_EQ(snapshot["refused"]["by_topic"]["dpc_stokes_sample"], 1u);
+  EXPECT_EQ(snapshot["refused"]["by_topic"]["dpc_bench_summary"], 1u);
 }
 
 TEST(DashboardModelTest, AtMostSixtyFourControllersAreKeptTheLongestSilentGoesFirst) {

@@ -411,7 +411,8 @@ function onSnapshot(s) {
   state.targetRevision = s.target ? s.target.revision : null;  // text: 64 bits
   state.targetRevisionCount = s.target ? s.target.revision_count : null;
 
-  if (s.error_deg) {
+  // Plotted only when a summary of the bench arrived since the last snapshot.
+  if (s.fresh && s.error_deg) {
     errorData[0].push(s.t_s); errorData[1].push(s.error_deg.mean); errorData[2].push(s.error_deg.max);
     errorData[3].push(s.lock_threshold_deg); errorData[4].push(Math.max(-80, Math.min(0, s.extinction_db)));
     trim(errorData, s.t_s);
@@ -419,7 +420,7 @@ function onSnapshot(s) {
     state.errorPoints = errorData[0].length;
     $('error-now').textContent = `mean ${s.error_deg.mean.toFixed(2)}°, max ${s.error_deg.max.toFixed(2)}°, extinction ${s.extinction_db.toFixed(1)} dB`;
   }
-  if (s.driver) {
+  if (s.fresh && s.driver) {
     ensurePhiPlot(s.driver.phi.length);
     phiData[0].push(s.t_s);
     s.driver.phi.forEach((phi, i) => phiData[i + 1].push(phi));
