@@ -125,7 +125,11 @@ class WebSocketSession : public std::enable_shared_from_this<WebSocketSession> {
 
   void Start(http::request<http::empty_body> request) {
     beast::get_lowest_layer(ws_).expires_never();
-    ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
+    // Handshake within 30 s; a page that answers no ping for 5 min is gone (a browser answers
+    // pings by itself, so an open page stays connected however long it only listens).
+    auto timeout = websocket::stream_base::timeout::suggested(beast::role_type::server);
+    timeout.keep_alive_pings = true;
+    ws_.set_option(timeout);
     ws_.read_message_max(kMaxClientMessageBytes);
     ws_.async_accept(request, [self = shared_from_this()](beast::error_code ec) {
       if (ec) return;
