@@ -54,13 +54,22 @@ std::string PanelLetter(int index) {
 
 // The y label of a control column: "phi_3" / "phi3" → φ₃ (gnuplot enhanced text), anything
 // else verbatim.
-std::string ControlLabel(const std::string& name) {
+// The y label of control `index` (0-based): φ_i as the paper writes it, followed by the
+// control's own name when it has one ("φ_1 wp1", "φ_4 wp2.orientation"), in gnuplot's enhanced
+// text (the name's special characters escaped).
+std::string ControlLabel(const std::string& name, int index) {
   static const std::regex kPhi("phi_?([0-9]+)");
   std::smatch match;
-  if (std::regex_match(name, match, kPhi)) {
-    return fmt::format("{} enhanced", GnuplotQuote(fmt::format("φ_{{{}}}", match[1].str())));
+  std::string label = fmt::format("φ_{{{}}}", index + 1);
+  if (std::regex_match(name, match, kPhi) && match[1].str() == std::to_string(index + 1)) {
+    return fmt::format("{} enhanced", GnuplotQuote(label));
   }
-  return fmt::format("{} noenhanced", GnuplotQuote(name));
+  std::string escaped;
+  for (const char c : name) {
+    if (std::string_view("_^{}@&~\\").find(c) != std::string_view::npos) escaped += '\\';
+    escaped += c;
+  }
+  return fmt::format("{} enhanced", GnuplotQuote(label + " " + escaped));
 }
 
 // The smallest of {1, 2, 5}·10^k at least `raw`.
@@ -316,7 +325,7 @@ void WritePaperFigure(const std::string& trace_csv, const std::string& png_path,
                    "set yrange [{:.12g}:{:.12g}]\n"
                    "set ytics {:.12g}\n"
                    "set ylabel {}\n",
-                   y_axis.min, y_axis.max, y_axis.tick_step, ControlLabel(name));
+                   y_axis.min, y_axis.max, y_axis.tick_step, ControlLabel(name, i));
     if (!std::isfinite(lo)) {
       fmt::format_to(out, "set label 2 'no finite values' at graph 0.5, graph 0.5 center\n");
     }
