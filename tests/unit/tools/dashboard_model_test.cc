@@ -2,6 +2,7 @@
 // from the bench's summaries, the target with its revision exact, the driver and the controllers.
 #include "dashboard_model.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -163,7 +164,7 @@ TEST(DashboardModelTest, AtMostSixtyFourControllersAreKeptTheLongestSilentGoesFi
   DashboardModel model;
   for (int i = 0; i < 100; ++i) {
     ControllerStatusReport s;
-    s.controller_id = "c" + std::to_string(i);
+    s.controller_id = fmt::format("c{}", i);
     model.OnStatus(s, static_cast<double>(i));
   }
   const auto controllers = model.TakeSnapshot(100.0)["controllers"];
