@@ -51,7 +51,6 @@ void DashboardModel::OnDevice(const DeviceDescription& device) { device_ = devic
 void DashboardModel::OnTarget(const BenchTarget& target) {
   if (target_ && target.revision < target_->revision) return;  // an older one arriving late
   target_ = target;
-  built_target_ = BuildTarget(target.target);
 }
 
 void DashboardModel::OnStatus(const ControllerStatusReport& status, double now_s) {
@@ -151,9 +150,10 @@ nlohmann::json DashboardModel::TakeSnapshot(double now_s) {
       target["kind"] = "point";
       target["point"] = Triple(t.point);
     } else {
+      const Target set = BuildTarget(t);  // normalized: n·S = c with |n| = 1
       target["kind"] = "set";
-      target["normal"] = Triple(built_target_->normal());
-      target["offset"] = built_target_->offset();
+      target["normal"] = Triple(set.normal());
+      target["offset"] = set.offset();
     }
     snapshot["target"] = std::move(target);
   } else {

@@ -21,7 +21,6 @@
 
 #include "dpc/bench/bench_messages.h"
 #include "dpc/bench/bench_summary.h"
-#include "dpc/control/target.h"
 
 namespace dpc::tools {
 
@@ -61,7 +60,6 @@ class DashboardModel {
   double condition_since_s_ = 0.0;
 
   std::optional<BenchTarget> target_;
-  std::optional<Target> built_target_;  ///< target_, built once
   std::optional<DeviceDescription> device_;
 
   // The summaries of the current period, folded.

@@ -240,23 +240,18 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
         return SendText(http::status::forbidden, request,
                         fmt::format("dpc dashboard: WebSocket from another origin ({}) refused", origin.substr(0, 100)));
       }
-      uint64_t id = 0;
+      std::shared_ptr<WebSocketSession> session;
       {
         std::lock_guard<std::mutex> lock(server_->mutex);
-        if (server_->clients.size() >= server_->options.max_clients) {
-          id = 0;
-        } else {
-          id = server_->next_id++;
+        if (server_->clients.size() < server_->options.max_clients) {
+          const uint64_t id = server_->next_id++;
+          session = std::make_shared<WebSocketSession>(stream_.release_socket(), server_, id);
+          server_->clients[id] = session;
         }
       }
-      if (id == 0) {
+      if (!session) {
         return SendText(http::status::service_unavailable, request,
                         fmt::format("dpc dashboard: {} pages are connected already", server_->options.max_clients));
-      }
-      auto session = std::make_shared<WebSocketSession>(stream_.release_socket(), server_, id);
-      {
-        std::lock_guard<std::mutex> lock(server_->mutex);
-        server_->clients[id] = session;
       }
       session->Start(std::move(request));
       return;

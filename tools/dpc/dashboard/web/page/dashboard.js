@@ -219,15 +219,11 @@ function frame(now) {
     placeCamera();
     trailIn.update();
     trailOut.update();
-    const t0 = performance.now();
     renderer.render(scene, camera);
-    state.renderMs = performance.now() - t0;
     state.draws++;
     fpsDraws++;
   }
-  const t0 = performance.now();
   drawPanels(now);
-  state.frameMs = performance.now() - t0 + (state.renderMs || 0);
   state.frames++;
   fpsFrames++;
   if (now - fpsSince >= 1000) {
@@ -452,11 +448,7 @@ function connect() {
   socket.onmessage = (event) => {
     let message;
     try { message = JSON.parse(event.data); } catch { return; }
-    if (message.type === 'snapshot') {
-      const t0 = performance.now();
-      onSnapshot(message);
-      state.snapshotMs = performance.now() - t0;
-    }
+    if (message.type === 'snapshot') onSnapshot(message);
     else if (message.type === 'target_reply') onAnswer(message);
   };
   socket.onclose = () => {
