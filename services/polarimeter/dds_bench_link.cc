@@ -43,9 +43,13 @@ DdsBenchLink::~DdsBenchLink() {
   summary_writer_.reset();
 }
 
-void DdsBenchLink::Publish(const BenchSample& sample) {
+void DdsBenchLink::WriteSample(const BenchSample& sample) {
   bus::WriteSample(sample, bench_id_, &sample_message_);
   writer_->Write(sample_message_);
+}
+
+void DdsBenchLink::Publish(const BenchSample& sample) {
+  WriteSample(sample);
   if (!summary_writer_) return;
   const int64_t now_ns = MonotonicNs();
   BenchSummary summary;
@@ -91,7 +95,7 @@ std::optional<ControlVector> DdsBenchLink::AwaitAnswer(const BenchSample& sample
       lock.unlock();
       BenchSample again = sample;
       again.publish_time_ns = WallClockNs();
-      Publish(again);
+      WriteSample(again);  // the same sample: the summary has it already
       lock.lock();
     }
   }

@@ -44,6 +44,8 @@ class DdsBenchLink final : public BenchLink {
   const bus::ReaderCounters& state_counters() const { return states_->counters(); }
 
  private:
+  /// Puts one sample on the bus (Publish, and AwaitAnswer's re-publications).
+  void WriteSample(const BenchSample& sample);
   void OnState(const msg::WaveplateState& message, const SourceId& source);
   void OnTarget(const msg::Target& message, const SourceId& source);
   /// Whether `source` is the bench's driver (SourceBinding); else logs the refusal. Under mutex_.
