@@ -238,6 +238,14 @@ DriverState DriverCore::State(int64_t wall_ns) const {
   state.saturated = saturated_;
   state.mode = arbiter_.holding() ? DriverMode::kHolding : DriverMode::kActive;
   state.reason = arbiter_.reason();
+  static constexpr std::string_view kHolding = "holding: ";
+  if (arbiter_.holding() && controllers_connected_ == 0 && arbiter_.switches() > 0 &&
+      state.reason.rfind(kHolding, 0) == 0) {
+    // The obeyed controller went silent and no controller is left on the bus (it stopped,
+    // crashed and its lease ran out, or its host is gone): not a hiccup to wait out.
+    state.reason = fmt::format("holding: no controller connected any more (at the hold: {})",
+                               state.reason.substr(kHolding.size()));
+  }
   state.obeyed_controller_id = arbiter_.obeyed();
   state.obeyed_priority = arbiter_.obeyed_priority();
   state.commands_applied = applied_count_;

@@ -92,6 +92,11 @@ class DriverCore {
   /// sequence is one more than the previous published state's, starting at 1.
   DriverState Publishable(int64_t wall_ns);
 
+  /// How many command writers the driver's reader is matched with (the DDS layer's count; -1:
+  /// not known). While none is and the driver holds, its state says so: a silence that
+  /// started with the last controller leaving is no hiccup to wait out.
+  void SetControllersConnected(int count) { controllers_connected_ = count; }
+
   const std::string& obeyed() const { return arbiter_.obeyed(); }
   /// The newest sample the bench published, as far as the driver knows (0: none yet).
   uint64_t newest_sample() const { return timeline_.newest(); }
@@ -126,6 +131,7 @@ class DriverCore {
   std::array<bool, kMaxControls> saturated_{};
   int64_t last_applied_ns_ = 0;       ///< the driver's clock when the last command was applied
   bool applied_any_ = false;
+  int controllers_connected_ = -1;
   uint64_t answers_sample_ = 0;
   int64_t sample_time_ns_ = 0;
   int64_t sample_publish_time_ns_ = 0;

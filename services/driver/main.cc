@@ -144,6 +144,7 @@ class DriverService final : public Service {
       {
         std::lock_guard<std::mutex> lock(mutex_);
         const int64_t now_ns = MonotonicNs();
+        core_.SetControllersConnected(commands_->counters().matched_writers.load(std::memory_order_relaxed));
         if (auto state = core_.Tick(now_ns, WallClockNs())) Publish(std::move(*state));
         due_ns = std::clamp(core_.NextTickNs(), now_ns + tick_ns, now_ns + kMaxSleepNs);
       }

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "support/bench_fixture.h"
@@ -154,6 +155,32 @@ TEST_F(BenchFailoverTest, WithoutAControllerTheDriverHoldsAndReportsThenResumes)
       break;
     }
   }
+}
+
+TEST_F(BenchFailoverTest, WhenTheOnlyControllerStopsTheDriverKeepsPublishingItsHoldAndSaysNoneIsLeft) {
+  // `docker stop` of the only controller container: SIGTERM, its participant leaves. The driver
+  // holds and keeps publishing its state at the heartbeat (5 ms) for as long as the hold lasts,
+  // saying that no controller is connected any more.
+  StartObserver(59);
+  StartDriver();
+  Process& only = StartController("only", 0);
+  StartPolarimeter({"--rate-hz", "1000"});
+  ASSERT_TRUE(Eventually([&] { return AppliedBy("only") > 500; }, 20s)) << Logs();
+  only.Signal(SIGTERM);
+  ASSERT_TRUE(Eventually([&] {
+    auto s = LatestState();
+    return s && s->mode() == msg::DRIVER_HOLDING &&
+           s->reason().to_string().find("no controller connected any more") != std::string::npos;
+  }, 5s)) << (LatestState() ? LatestState()->reason().to_string() : std::string("no state")) << Logs();
+  const size_t count = StateCount();
+  std::this_thread::sleep_for(2s);
+  const size_t heartbeats = StateCount() - count;
+  // 400 at 5 ms; a loaded 2-core machine may stretch some.
+  EXPECT_GE(heartbeats, 100u) << "holding states in 2 s";
+  const auto held = LatestState();
+  EXPECT_EQ(held->mode(), msg::DRIVER_HOLDING);
+  EXPECT_EQ(held->reason().to_string().rfind("holding: no controller connected any more (at the hold: only silent", 0), 0u)
+      << held->reason().to_string();
 }
 
 TEST_F(BenchFailoverTest, ADriverRestartedAfterKillNineStartsWhereTheWaveplatesWereLeft) {

@@ -1,6 +1,6 @@
 // The bench's loop as real processes on loopback: dpc-polarimeter, dpc-controller and dpc-driver
 // lock over Fast DDS, rate commands track a rotation, and a lockstep run reproduces `dpc sim`.
-// Every test uses its own DDS domain (40–59) and ends every process it started.
+// Every test uses its own DDS domain (40–59; 59: bench_failover) and ends every process it started.
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

@@ -1,3 +1,4 @@
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <optional>
@@ -136,6 +137,36 @@ TEST_F(DriverCoreTest, HoldsAndSaysWhyWhenNoControllerIsLeftThenResumes) {
   EXPECT_LE(obeyed_at - 20 * kMs, 1300 * kUs);
 }
 
+TEST_F(DriverCoreTest, HoldingSaysSoWhenTheLastControllerLeftTheBus) {
+  core_.SetControllersConnected(1);
+  ASSERT_TRUE(Send(core_, Command("only", 0, {0.3, 0.2, 0.1}, 1), 0, 0));
+  auto state = core_.Tick(3 * kMs, 0);
+  ASSERT_TRUE(state.has_value());
+  ASSERT_EQ(state->mode, DriverMode::kHolding);
+  EXPECT_EQ(state->reason.find("holding: only silent"), 0u) << state->reason;
+  // Its writer is gone (it stopped, or its lease ran out): the heartbeats say so, with why the
+  // hold began; φ stays held.
+  core_.SetControllersConnected(0);
+  state = core_.Tick(9 * kMs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->reason.find("holding: no controller connected any more (at the hold: only silent"), 0u)
+      << state->reason;
+  EXPECT_EQ(Phi(*state), std::vector<double>({0.3, 0.2, 0.1}));
+  // A controller connects again: the reason is the arbiter's own again, and it takes over.
+  core_.SetControllersConnected(1);
+  state = core_.Tick(15 * kMs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->reason.find("holding: only silent"), 0u) << state->reason;
+  state = Send(core_, Command("only", 0, {0.31, 0.2, 0.1}, 2), 16 * kMs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->mode, DriverMode::kActive);
+}
+
+TEST_F(DriverCoreTest, BeforeAnyControllerTheReasonIsNoControllerYet) {
+  core_.SetControllersConnected(0);
+  EXPECT_EQ(core_.State(0).reason, "holding: no controller yet");
+}
+
 TEST_F(DriverCoreTest, AtFailoverTheStandbysLatestCommandIsAppliedAtOnce) {
   // The standby commands other φ than the primary; the state that names it obeyed already
   // carries its latest command (it does not wait a sample period for the next one).
@@ -164,7 +195,7 @@ TEST_F(DriverCoreTest, ANewControllerBeyondTheLimitIsRefusedWhileEveryKnownOneIs
   for (int k = 1; k <= 5; ++k) {
     const int64_t t = k * 100 * kUs;
     for (int c = 0; c < limit; ++c) {
-      Send(core_, Command("c" + std::to_string(c), c == 0 ? 10 : 0, {0.1, 0.1, 0.1}, k), t + c * kUs, 0);
+      Send(core_, Command(fmt::format("c{}", c), c == 0 ? 10 : 0, {0.1, 0.1, 0.1}, k), t + c * kUs, 0);
     }
   }
   const uint64_t rejected = core_.commands_rejected();
@@ -178,7 +209,7 @@ TEST_F(DriverCoreTest, ANewControllerBeyondTheLimitIsRefusedWhileEveryKnownOneIs
   for (int k = 6; k <= 60; ++k) {
     const int64_t t = k * 100 * kUs;
     for (int c = 0; c < limit - 1; ++c) {
-      Send(core_, Command("c" + std::to_string(c), c == 0 ? 10 : 0, {0.1, 0.1, 0.1}, k), t + c * kUs, 0);
+      Send(core_, Command(fmt::format("c{}", c), c == 0 ? 10 : 0, {0.1, 0.1, 0.1}, k), t + c * kUs, 0);
     }
   }
   auto state = Send(core_, Command("newcomer", 100, {0.2, 0.2, 0.2}, 60), 6 * kMs + 80 * kUs, 0);
