@@ -24,6 +24,8 @@ constexpr int kYTickSpacingPx = 35;
 // Colours: Okabe–Ito, distinguishable with the common colour-vision deficiencies.
 constexpr std::array<const char*, 3> kStokesColours = {"#0072B2", "#D55E00", "#009E73"};
 constexpr const char* kControlColour = "#1F3F7A";
+constexpr const char* kErrorColour = "#B2182B";
+constexpr const char* kRangeColour = "#8C6D1F";
 constexpr const char* kTargetColour = "#222222";
 constexpr const char* kActivationColour = "#666666";
 constexpr std::array<const char*, 7> kSeriesColours = {"#0072B2", "#D55E00", "#009E73",
@@ -107,6 +109,36 @@ YAxis FitYAxis(double lo, double hi, int intervals) {
   return {y_min, y_max, NiceStep(y_max / intervals - y_min / intervals)};
 }
 
+// The error panel's log axis: the error's extremes in whole decades (at least 1e-4°, at most
+// 180°; two decades at least), and the extinction tics on the right axis: every 20 dB that
+// falls inside, placed at the error it stands for (error = 2·atan(10^(dB/20))).
+struct ErrorAxis {
+  double min_deg;
+  double max_deg;
+  std::string extinction_tics;  ///< gnuplot's ("label" position, …) list
+};
+
+ErrorAxis FitErrorAxis(double lo_deg, double hi_deg) {
+  constexpr double kFloorDeg = 1e-4;
+  if (!std::isfinite(lo_deg) || !std::isfinite(hi_deg)) {
+    lo_deg = 0.1;
+    hi_deg = 100.0;
+  }
+  ErrorAxis axis;
+  axis.min_deg = std::pow(10.0, std::floor(std::log10(std::max(lo_deg, kFloorDeg))));
+  axis.max_deg = std::min(180.0, std::pow(10.0, std::ceil(std::log10(std::max(hi_deg, kFloorDeg)))));
+  if (axis.max_deg < axis.min_deg * 100.0) axis.min_deg = axis.max_deg / 100.0;
+  for (int db = 0; db >= -200; db -= 20) {
+    const double error_deg = 2.0 * std::atan(std::pow(10.0, db / 20.0)) * 180.0 / M_PI;
+    if (error_deg < axis.min_deg) break;
+    if (error_deg > axis.max_deg) continue;
+    fmt::format_to(std::back_inserter(axis.extinction_tics), "{}\"{}\" {:.6g}",
+                   axis.extinction_tics.empty() ? "" : ", ", db, error_deg);
+  }
+  if (axis.extinction_tics.empty()) axis.extinction_tics = "\"\" 1";
+  return axis;
+}
+
 // A datablock "$name" of (t · time_scale, value) pairs.
 void AppendDatablock(fmt::memory_buffer* script, const std::string& name,
                      const std::vector<EnvelopePoint>& points, double time_scale) {
@@ -164,6 +196,11 @@ void ValidateOptions(const FigureOptions& options) {
   if (options.activation_s && !std::isfinite(*options.activation_s)) {
     throw std::invalid_argument("figure activation_s must be finite");
   }
+  for (const auto& [lo, hi] : options.control_ranges) {
+    if (std::isnan(lo) || std::isnan(hi) || !(lo <= hi)) {
+      throw std::invalid_argument(fmt::format("figure control range [{}, {}] must have min <= max", lo, hi));
+    }
+  }
   if (options.target_point && !IsUnitStokes(*options.target_point)) {
     throw std::invalid_argument(fmt::format("figure target_point {} must be a unit Stokes vector",
                                             FormatStokes(*options.target_point)));
@@ -192,7 +229,7 @@ void RequireWrittenPng(const std::string& png_path) {
 
 int PaperFigureHeightPx(int control_count, const FigureOptions& options) {
   const int top_band_px = options.title.empty() ? kFigureNoTitleBandPx : kFigureTitleBandPx;
-  return top_band_px + (1 + control_count) * options.panel_height_px + kFigureAxisBandPx;
+  return top_band_px + (2 + control_count) * options.panel_height_px + kFigureAxisBandPx;
 }
 
 void WritePaperFigure(const std::string& trace_csv, const std::string& png_path,
@@ -207,6 +244,10 @@ void WritePaperFigure(const std::string& trace_csv, const std::string& png_path,
   }
   const std::vector<std::string>& controls = envelope.header.control_names;
   const int control_count = static_cast<int>(controls.size());
+  if (!options.control_ranges.empty() && options.control_ranges.size() != controls.size()) {
+    throw std::invalid_argument(fmt::format("figure: {} control ranges for a trace of {} controls",
+                                            options.control_ranges.size(), controls.size()));
+  }
   const int width_px = options.width_px;
   const int height_px = PaperFigureHeightPx(control_count, options);
   const int top_band_px = options.title.empty() ? kFigureNoTitleBandPx : kFigureTitleBandPx;
@@ -225,6 +266,8 @@ void WritePaperFigure(const std::string& trace_csv, const std::string& png_path,
     AppendDatablock(&script, fmt::format("s_out_{}", k + 1), envelope.points[first_s_out + k],
                     options.time_scale);
   }
+  const size_t error_column = static_cast<size_t>(envelope.ColumnIndex("error_deg"));
+  AppendDatablock(&script, "error", envelope.points[error_column], options.time_scale);
   for (size_t i = 0; i < controls.size(); ++i) {
     AppendDatablock(&script, fmt::format("control_{}", i + 1),
                     envelope.points[first_control + i], options.time_scale);
@@ -270,7 +313,7 @@ void WritePaperFigure(const std::string& trace_csv, const std::string& png_path,
                    1.0 - (top_px + kPanelGapPx) / h,
                    1.0 - (top_px + options.panel_height_px - kPanelGapPx) / h,
                    PanelLetter(panel), 10.0 / w, 1.0 - (top_px + kPanelGapPx + 10) / h);
-    if (panel == control_count) {  // the bottom panel carries the time axis
+    if (panel == control_count + 1) {  // the bottom panel carries the time axis
       fmt::format_to(out, "set format x '%g'\nset xlabel {} noenhanced\n",
                      GnuplotQuote(fmt::format("Time ({})", options.time_unit)));
     } else {
@@ -312,31 +355,113 @@ void WritePaperFigure(const std::string& trace_csv, const std::string& png_path,
   fmt::format_to(out, "\nunset key\nunset arrow 1\nunset arrow 2\nunset arrow 3\n"
                       "unset mytics\n");
 
-  // (b), (c), …: one control signal each, y range fitted to its extremes.
+  // (b): the error, log axis, with the extinction's scale on the right.
+  set_panel(1);
+  {
+    const ErrorAxis axis = FitErrorAxis(envelope.min_value[error_column], envelope.max_value[error_column]);
+    fmt::format_to(out,
+                   "set logscale y\nset logscale y2\n"
+                   "set yrange [{0:.6g}:{1:.6g}]\nset y2range [{0:.6g}:{1:.6g}]\n"
+                   "set ytics nomirror autofreq format '%g'\nunset mytics\n"
+                   "set ylabel 'error (deg)' noenhanced\n"
+                   "set y2tics ({2})\n"
+                   "set y2label 'extinction (dB)' noenhanced\n",
+                   axis.min_deg, axis.max_deg, axis.extinction_tics);
+    fmt::format_to(out, "plot $error using 1:($2 > {:.6g} ? $2 : {:.6g}) with lines lc rgb '{}' notitle\n",
+                   axis.min_deg, axis.min_deg, kErrorColour);
+    fmt::format_to(out, "unset logscale y\nunset logscale y2\nunset y2tics\nunset y2label\n"
+                        "set ytics mirror\n");
+  }
+
+  // (c), (d), …: one control signal each, y range fitted to its extremes (and its range's guide
+  // lines when they are near).
   const int plot_height_px = options.panel_height_px - 2 * kPanelGapPx;
   const int tick_intervals = std::max(2, plot_height_px / kYTickSpacingPx);
   for (int i = 0; i < control_count; ++i) {
-    set_panel(1 + i);
+    set_panel(2 + i);
     const std::string& name = controls[static_cast<size_t>(i)];
-    const double lo = envelope.min_value[first_control + static_cast<size_t>(i)];
-    const double hi = envelope.max_value[first_control + static_cast<size_t>(i)];
+    double lo = envelope.min_value[first_control + static_cast<size_t>(i)];
+    double hi = envelope.max_value[first_control + static_cast<size_t>(i)];
+    std::vector<double> guides;
+    std::string off_scale;
+    if (!options.control_ranges.empty() && std::isfinite(lo)) {
+      const auto [range_min, range_max] = options.control_ranges[static_cast<size_t>(i)];
+      // Near: the span with the bound at most 3× the signal's own (at least 1 φ unit).
+      const double span = std::max(hi - lo, 1.0);
+      for (const double bound : {range_min, range_max}) {
+        if (!std::isfinite(bound)) continue;
+        if (std::max(hi, bound) - std::min(lo, bound) <= 3.0 * span) {
+          guides.push_back(bound);
+        } else {
+          off_scale += fmt::format("{}{:g}", off_scale.empty() ? "range " : ", ", bound);
+        }
+      }
+      for (const double g : guides) {
+        lo = std::min(lo, g);
+        hi = std::max(hi, g);
+      }
+    }
     const YAxis y_axis = FitYAxis(lo, hi, tick_intervals);
     fmt::format_to(out,
                    "set yrange [{:.12g}:{:.12g}]\n"
                    "set ytics {:.12g}\n"
                    "set ylabel {}\n",
                    y_axis.min, y_axis.max, y_axis.tick_step, ControlLabel(name, i));
+    for (size_t g = 0; g < guides.size(); ++g) {
+      fmt::format_to(out,
+                     "set arrow {} from graph 0, first {:.12g} to graph 1, first {:.12g} nohead "
+                     "dt (4,3) lc rgb '{}' lw 1.2 front\n",
+                     20 + g, guides[g], guides[g], kRangeColour);
+    }
+    if (!off_scale.empty()) {
+      fmt::format_to(out, "set label 3 {} at graph 0.99, graph 0.9 right noenhanced font ',9' tc rgb '{}'\n",
+                     GnuplotQuote(off_scale + " (off scale)"), kRangeColour);
+    }
     if (!std::isfinite(lo)) {
       fmt::format_to(out, "set label 2 'no finite values' at graph 0.5, graph 0.5 center\n");
     }
     fmt::format_to(out, "plot $control_{} using 1:2 with lines lc rgb '{}' notitle\n", i + 1,
                    kControlColour);
-    fmt::format_to(out, "unset label 2\n");
+    fmt::format_to(out, "unset label 2\nunset label 3\nunset arrow 20\nunset arrow 21\n");
   }
   fmt::format_to(out, "unset multiplot\n");
 
   RunGnuplot(fmt::to_string(script));
   RequireWrittenPng(png_path);
+}
+
+namespace {
+
+// The earlier series that `k` lies on (every point within 1 %, the same rates), or k.
+size_t CoincidesWith(const std::vector<RateSeries>& series, size_t k) {
+  const RateSeries& b = series[k];
+  for (size_t j = 0; j < k; ++j) {
+    const RateSeries& a = series[j];
+    if (a.rate_rad_per_s != b.rate_rad_per_s || a.error_deg.size() != b.error_deg.size() || a.error_deg.empty()) {
+      continue;
+    }
+    bool same = true;
+    for (size_t i = 0; i < a.error_deg.size() && same; ++i) {
+      const double x = a.error_deg[i];
+      const double y = b.error_deg[i];
+      same = (x == y) || (std::isfinite(x) && std::isfinite(y) &&
+                          std::abs(x - y) <= 0.01 * std::max(std::abs(x), std::abs(y)));
+    }
+    if (same) return j;
+  }
+  return k;
+}
+
+}  // namespace
+
+std::vector<std::string> RatePlotLabels(const std::vector<RateSeries>& series) {
+  std::vector<std::string> labels;
+  for (size_t k = 0; k < series.size(); ++k) {
+    const size_t j = CoincidesWith(series, k);
+    labels.push_back(j == k ? series[k].label
+                            : fmt::format("{} (coincides with {})", series[k].label, series[j].label));
+  }
+  return labels;
 }
 
 void WriteRatePlot(const std::string& png_path, const std::string& title,
@@ -424,13 +549,16 @@ void WriteRatePlot(const std::string& png_path, const std::string& title,
                    "textcolor rgb '{1}'\n",
                    line.error_deg, kTargetColour, GnuplotQuote(line.label));
   }
+  const std::vector<std::string> labels = RatePlotLabels(series);
   fmt::format_to(out, "plot ");
   for (size_t k = 0; k < series.size(); ++k) {
+    const bool hidden = CoincidesWith(series, k) != k;
     fmt::format_to(out,
-                   "{}$series_{} using 1:2 with linespoints lw 1.5 pt {} ps 1.1 lc rgb '{}' "
+                   "{}$series_{} using 1:2 with linespoints lw 1.5 {}pt {} ps 1.1 lc rgb '{}' "
                    "title {} noenhanced",
-                   k == 0 ? "" : ", \\\n     ", k, kSeriesPointTypes[k % kSeriesPointTypes.size()],
-                   kSeriesColours[k % kSeriesColours.size()], GnuplotQuote(series[k].label));
+                   k == 0 ? "" : ", \\\n     ", k, hidden ? "dt (5,4) " : "",
+                   kSeriesPointTypes[k % kSeriesPointTypes.size()],
+                   kSeriesColours[k % kSeriesColours.size()], GnuplotQuote(labels[k]));
   }
   fmt::format_to(out, "\n");
 

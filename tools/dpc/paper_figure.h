@@ -4,8 +4,13 @@
 //   (a)      s1, s2, s3 of S_out against time, y in [−1.05, 1.05], a legend, dashed horizontal
 //            lines at the target's components and a dashed vertical line where the DPC is
 //            activated (when given);
-//   (b), (c), …  one panel per control signal φ_i against time, y label = its column name
-//            ("phi_3" is drawn as φ₃), y range fitted to the signal's extremes.
+//   (b)      the pointing error to the target (deg, log axis) with its extinction on the right
+//            axis (dB: 20·log10 tan(error/2), the power a polarizer aligned with the target
+//            passes of the orthogonal state, relative to the aligned one);
+//   (c), (d), …  one panel per control signal φ_i against time, y label φ_i (and the column's
+//            name when it is not phi_i), y range fitted to the signal's extremes; the control's
+//            range [min, max] (FigureOptions::control_ranges) as dashed guide lines when it lies
+//            near the signal (the y range widened to show it), else named in the panel.
 //
 // All panels share one time axis (t · time_scale, in time_unit); only the bottom panel carries
 // tick labels and the axis label. The activation line is drawn in every panel.
@@ -13,7 +18,7 @@
 // Layout, in pixels (a PNG of width_px × PaperFigureHeightPx(controls, options)):
 //
 //   top band      kFigureTitleBandPx when the title is non-empty, else kFigureNoTitleBandPx
-//   panels        (1 + controls) × panel_height_px, panel letters in the left margin
+//   panels        (2 + controls) × panel_height_px, panel letters in the left margin
 //   bottom band   kFigureAxisBandPx (time tick labels and axis label)
 //   left / right  kFigureLeftMarginPx (letters, y labels, tick labels) /
 //                 kFigureRightMarginPx (the legend of panel (a))
@@ -28,6 +33,7 @@
 
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dpc/optics/stokes.h"
@@ -43,6 +49,9 @@ struct FigureOptions {
   /// The target SOP S* (a unit Stokes vector): dashed horizontal lines at its three components
   /// in panel (a).
   std::optional<StokesVector> target_point;
+  /// Each control's range {min, max}, in the trace's order (one per control, or none at all);
+  /// a bound that is not finite is not drawn.
+  std::vector<std::pair<double, double>> control_ranges;
   /// PNG width; at least kFigureMinWidthPx.
   int width_px = 1000;
   /// Height of each panel; at least kFigureMinPanelHeightPx.
@@ -62,7 +71,7 @@ inline constexpr int kFigureMinWidthPx = kFigureLeftMarginPx + kFigureRightMargi
 inline constexpr int kFigureMinPanelHeightPx = 60;
 
 /// The PNG height of a figure with `control_count` control panels:
-/// top band + (1 + control_count) · panel_height_px + kFigureAxisBandPx.
+/// top band + (2 + control_count) · panel_height_px + kFigureAxisBandPx.
 int PaperFigureHeightPx(int control_count, const FigureOptions& options);
 
 /// Draws the paper-style figure of the TraceWriter CSV `trace_csv` into `png_path`.
@@ -80,6 +89,11 @@ struct RateSeries {
   std::vector<double> rate_rad_per_s;
   std::vector<double> error_deg;
 };
+
+/// The legend labels of a rate plot: each series' label, and for a series whose every point
+/// lies within 1 % of an earlier series' (same rates) " (coincides with <that label>)": one
+/// curve hides the other, so the legend says so (the later one is drawn dashed).
+std::vector<std::string> RatePlotLabels(const std::vector<RateSeries>& series);
 
 inline constexpr int kRatePlotWidthPx = 800;
 inline constexpr int kRatePlotHeightPx = 560;

@@ -336,4 +336,10 @@ std::string WaveplateChain::Describe() const {
   return text;
 }
 
+std::string WaveplateChain::PaperNotation() const {
+  std::string text;
+  for (auto stage = stages_.rbegin(); stage != stages_.rend(); ++stage) text += stage->Describe();
+  return text;
+}
+
 }  // namespace dpc

@@ -118,8 +118,11 @@ class WaveplateChain {
   const std::vector<double>& range_min() const { return range_min_; }
   const std::vector<double>& range_max() const { return range_max_; }
 
-  /// "R1 R3 R1".
+  /// The stages in the order the light meets them: "R3 R1 R3 R1".
   std::string Describe() const;
+  /// The paper's notation, the matrix product M = M_m…M_1 (the last stage first):
+  /// "R1R3R1R3" for the stages R3 R1 R3 R1 in light order.
+  std::string PaperNotation() const;
 
  private:
   struct Element {

@@ -77,6 +77,10 @@ TEST_F(WaveplateChainTest, AxesStringListsStagesInLightOrder) {
   const Matrix3 expected =
       R1(M_PI * phi[3]) * R3(M_PI * phi[2]) * R1(M_PI * phi[1]) * R3(M_PI * phi[0]);
   EXPECT_LT((chain.MuellerMatrix(pose) - expected).norm(), 1e-14);
+  EXPECT_EQ(chain.Describe(), "R3 R1 R3 R1");
+  EXPECT_EQ(chain.PaperNotation(), "R1R3R1R3");
+  EXPECT_EQ(WaveplateChain::FromAxes("131").PaperNotation(), "R1R3R1");
+  EXPECT_EQ(WaveplateChain::FromAxes("123").PaperNotation(), "R3R2R1");
 }
 
 TEST_F(WaveplateChainTest, PaperJacobianFormForThreeStages) {

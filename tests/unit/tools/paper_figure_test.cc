@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "dpc/sim/trace_writer.h"
+#include "support/png_pixels.h"
 
 namespace dpc {
 namespace {
@@ -98,7 +99,64 @@ TEST_F(PaperFigureTest, ThreeControlFigureHasTheDocumentedSize) {
   const PngSize size = ReadPngSize(png_);
   EXPECT_EQ(size.width_px, 1000u);
   EXPECT_EQ(size.height_px, static_cast<uint32_t>(PaperFigureHeightPx(3, options)));
-  EXPECT_EQ(PaperFigureHeightPx(3, options), kFigureTitleBandPx + 4 * 170 + kFigureAxisBandPx);
+  EXPECT_EQ(PaperFigureHeightPx(3, options), kFigureTitleBandPx + 5 * 170 + kFigureAxisBandPx);
+}
+
+// Panel p's rows in a figure with a title (p = 0: S_out, 1: error, 2…: the controls).
+std::pair<uint32_t, uint32_t> PanelRows(int panel, const FigureOptions& options) {
+  const int top = (options.title.empty() ? kFigureNoTitleBandPx : kFigureTitleBandPx) +
+                  panel * options.panel_height_px;
+  return {static_cast<uint32_t>(top), static_cast<uint32_t>(top + options.panel_height_px)};
+}
+
+TEST_F(PaperFigureTest, PanelBShowsTheErrorCurveWithTheExtinctionScale) {
+  WriteSyntheticTrace(trace_, 3, 4000, 10e-3, 2e-3, target_);
+  FigureOptions options;
+  options.title = "error panel";
+  options.activation_s = 2e-3;
+  options.target_point = target_;
+  WritePaperFigure(trace_, png_, options);
+  const testing::PngPixels png = testing::ReadPngPixels(png_);
+  const auto error_colour = testing::HexColour("#B2182B");
+  const auto [b0, b1] = PanelRows(1, options);
+  const auto [a0, a1] = PanelRows(0, options);
+  const auto [c0, c1] = PanelRows(2, options);
+  // The error curve runs across panel (b) (from ~90° before the DPC to well below 1° after).
+  EXPECT_GT(png.CountNear(b0, b1, error_colour), 400u);
+  EXPECT_EQ(png.CountNear(a0, a1, error_colour, 20), 0u);
+  EXPECT_EQ(png.CountNear(c0, c1, error_colour, 20), 0u);
+}
+
+TEST_F(PaperFigureTest, ControlRangesAreGuideLinesWhenNearAndNamedWhenFar) {
+  WriteSyntheticTrace(trace_, 3, 4000, 10e-3, 2e-3, target_);
+  FigureOptions options;
+  options.title = "ranges";
+  const auto range_colour = testing::HexColour("#8C6D1F");
+  const auto count_in = [&](int panel) {
+    const testing::PngPixels png = testing::ReadPngPixels(png_);
+    const auto [y0, y1] = PanelRows(panel, options);
+    return png.CountNear(y0, y1, range_colour, 25);
+  };
+  WritePaperFigure(trace_, png_, options);
+  EXPECT_EQ(count_in(2), 0u) << "no ranges given: no guide lines";
+  // |φ| ≲ 1 in the synthetic trace: ±1.5 is near, two dashed lines across the panel.
+  options.control_ranges = {{-1.5, 1.5}, {-1.5, 1.5}, {-1.5, 1.5}};
+  WritePaperFigure(trace_, png_, options);
+  const size_t near = count_in(2);
+  EXPECT_GT(near, 300u);  // two dashed lines ~800 px wide (~430 px seen)
+  EXPECT_GT(count_in(4), 300u);
+  EXPECT_LT(count_in(1), 10u) << "not in the error panel";
+  // ±100 is far: not drawn (the signal keeps its scale), only named in the panel.
+  options.control_ranges = {{-100, 100}, {-100, 100}, {-100, 100}};
+  WritePaperFigure(trace_, png_, options);
+  const size_t far = count_in(2);
+  EXPECT_GT(far, 0u) << "the range is named";
+  EXPECT_LT(far, near / 3);
+  // One range per control, min <= max.
+  options.control_ranges = {{-1, 1}};
+  EXPECT_THROW(WritePaperFigure(trace_, png_, options), std::invalid_argument);
+  options.control_ranges = {{1, -1}, {-1, 1}, {-1, 1}};
+  EXPECT_THROW(WritePaperFigure(trace_, png_, options), std::invalid_argument);
 }
 
 TEST_F(PaperFigureTest, FourControlFigureWithoutTitleOrMarkers) {
@@ -111,7 +169,7 @@ TEST_F(PaperFigureTest, FourControlFigureWithoutTitleOrMarkers) {
   WritePaperFigure(trace_, png_, options);
   const PngSize size = ReadPngSize(png_);
   EXPECT_EQ(size.width_px, 800u);
-  EXPECT_EQ(size.height_px, static_cast<uint32_t>(kFigureNoTitleBandPx + 5 * 120 +
+  EXPECT_EQ(size.height_px, static_cast<uint32_t>(kFigureNoTitleBandPx + 6 * 120 +
                                                   kFigureAxisBandPx));
 }
 
@@ -214,6 +272,22 @@ TEST_F(PaperFigureTest, RatePlotRenders) {
   const PngSize size = ReadPngSize(png_);
   EXPECT_EQ(size.width_px, static_cast<uint32_t>(kRatePlotWidthPx));
   EXPECT_EQ(size.height_px, static_cast<uint32_t>(kRatePlotHeightPx));
+}
+
+TEST(RatePlotLabels, SaysWhenACurveLiesOnAnother) {
+  const std::vector<double> rates = {1e3, 1e4, 1e5};
+  const std::vector<RateSeries> series = {
+      {"pinv", rates, {0.1, 1.0, 10.0}},
+      {"damped", rates, {0.1004, 0.998, 10.02}},  // within 1 %: hidden under pinv
+      {"transpose", rates, {0.2, 2.0, 20.0}},
+      {"gp", {1e3, 1e4}, {0.1, 1.0}},              // other rates: not compared
+  };
+  const std::vector<std::string> labels = RatePlotLabels(series);
+  ASSERT_EQ(labels.size(), 4u);
+  EXPECT_EQ(labels[0], "pinv");
+  EXPECT_EQ(labels[1], "damped (coincides with pinv)");
+  EXPECT_EQ(labels[2], "transpose");
+  EXPECT_EQ(labels[3], "gp");
 }
 
 TEST_F(PaperFigureTest, RatePlotRejectsBadSeries) {

@@ -50,7 +50,7 @@ TEST_F(TraceFormatTest, HeaderCommentsStartWithTheMagicLine) {
   const std::vector<std::string> lines = TraceHeaderComments(simulator, 10);
   ASSERT_FALSE(lines.empty());
   EXPECT_EQ(lines[0], "dpc-trace");
-  EXPECT_EQ(lines[1], "title=paper-131: R1 R3 R1, gp, model loop");
+  EXPECT_EQ(lines[1], "title=paper-131: M = R1R3R1 (light: R1 R3 R1), gp, model loop");
   EXPECT_EQ(lines.back(), "trace_every=10");
 }
 
@@ -63,7 +63,7 @@ TEST_F(TraceFormatTest, MetadataRoundTripsThroughATraceFile) {
   const std::map<std::string, std::string> metadata = ReadTraceMetadata(path_);
   EXPECT_EQ(metadata.size(), 5u);
   EXPECT_EQ(metadata.count("dpc-trace"), 0u);  // the magic line is not a key
-  EXPECT_EQ(metadata.at("title"), "paper-131: R1 R3 R1, gp, measured loop");
+  EXPECT_EQ(metadata.at("title"), "paper-131: M = R1R3R1 (light: R1 R3 R1), gp, measured loop");
   EXPECT_EQ(std::stod(metadata.at("activation_s")), scenario_.controller.activation_s);
   EXPECT_EQ(metadata.at("target_point"), "0,0.59999999999999998,0.80000000000000004");
   EXPECT_EQ(std::stod(metadata.at("sample_rate_hz")), 50e6);
@@ -87,7 +87,7 @@ TEST_F(TraceFormatTest, FigureOptionsFromATraceEqualThoseOfItsRun) {
 TEST_F(TraceFormatTest, FigureOptionsForAPointTarget) {
   const ClosedLoopSimulator simulator(scenario_);
   const FigureOptions options = FigureOptionsFor(simulator);
-  EXPECT_EQ(options.title, "paper-131: R1 R3 R1, gp, model loop");
+  EXPECT_EQ(options.title, "paper-131: M = R1R3R1 (light: R1 R3 R1), gp, model loop");
   ASSERT_TRUE(options.activation_s.has_value());
   EXPECT_NEAR(*options.activation_s, 3e-5, kTolerance);
   ASSERT_TRUE(options.target_point.has_value());
