@@ -139,6 +139,33 @@ void States() {
   Seed("read_state", "ramping", message, ok);
 }
 
+void Statuses() {
+  auto ok = [](const msg::ControllerStatus& m) {
+    ControllerStatusReport s;
+    return bus::ReadStatus(m, &s).empty();
+  };
+  ControllerStatusReport status;
+  status.controller_id = "main";
+  status.priority = 10;
+  status.law = "gp";
+  status.condition = "waiting for samples";
+  Seed("read_status", "waiting", bus::StatusMessage(status, "bench"), ok);
+  status.obeyed = true;
+  status.condition = "tracking (predicting 0.200 ms ahead, input at 120 rad/s)";
+  status.answers_sample = 123456;
+  status.error_deg = 0.8;
+  status.sigma_max = 1.9;
+  status.sigma_min = 0.7;
+  status.nullspace_active_fraction = 1.0;
+  status.compute_time_mean_s = 1.2e-6;
+  status.compute_time_max_s = 9e-6;
+  status.updates = 123456;
+  status.missed_deadlines = 2;
+  status.last_rejection = "sample 17: a non-unit S_in (|S| = 1.2)";
+  status.publish_time_ns = 1'700'000'000'000'000'000;
+  Seed("read_status", "tracking", bus::StatusMessage(status, "bench"), ok);
+}
+
 void Summaries() {
   auto ok = [](const msg::BenchSummary& m) {
     BenchSummary s;
@@ -273,6 +300,7 @@ int main(int argc, char** argv) {
     Targets();
     Requests();
     Summaries();
+    Statuses();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "dpc_fuzz_seeds: %s\n", e.what());
     return 1;

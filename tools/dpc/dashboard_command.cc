@@ -14,10 +14,9 @@
 
 #include "dashboard_model.h"
 #include "dashboard_server.h"
+#include "target_command.h"
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/message_conversion.h"
-#include "dpc/config/scenario_error.h"
-#include "dpc/config/scenario_validation.h"
 
 #ifndef DPC_DASHBOARD_BUILD_ASSETS
 #define DPC_DASHBOARD_BUILD_ASSETS ""
@@ -39,33 +38,6 @@ std::string Dump(const json& value) { return value.dump(-1, ' ', false, json::er
 bool HasIndex(const std::string& dir) {
   std::error_code ec;
   return !dir.empty() && std::filesystem::is_regular_file(dir + "/index.html", ec);
-}
-
-/// A controller's status read at the edge: numbers finite, else why not.
-std::string ReadStatus(const msg::ControllerStatus& m, ControllerStatusReport* out) {
-  const double numbers[] = {m.error_deg(), m.sigma_max(), m.sigma_min(), m.nullspace_active_fraction(),
-                            m.compute_time_mean_s(), m.compute_time_max_s()};
-  for (double v : numbers) {
-    if (!std::isfinite(v)) return "a non-finite figure";
-  }
-  if (m.controller_id().size() == 0) return "no controller_id";
-  out->controller_id = bus::PrintableName(m.controller_id().to_string());
-  out->priority = m.priority();
-  out->law = bus::PrintableName(m.law().to_string());
-  out->obeyed = m.obeyed();
-  out->condition = m.condition().to_string();
-  out->answers_sample = m.answers_sample();
-  out->error_deg = m.error_deg();
-  out->sigma_max = m.sigma_max();
-  out->sigma_min = m.sigma_min();
-  out->nullspace_active_fraction = m.nullspace_active_fraction();
-  out->compute_time_mean_s = m.compute_time_mean_s();
-  out->compute_time_max_s = m.compute_time_max_s();
-  out->updates = m.updates();
-  out->missed_deadlines = m.missed_deadlines();
-  out->last_rejection = m.last_rejection().to_string();
-  out->publish_time_ns = m.publish_time_ns();
-  return "";
 }
 
 /// What the server does with a page's messages: target requests, answered when the driver
@@ -246,22 +218,16 @@ std::optional<TargetConfig> ParsePageTargetRequest(const std::string& text, std:
       target.offset = offset->get<double>();
     }
   } else if (k == "linear") {
-    target.kind = TargetConfig::Kind::kSet;
-    target.normal = Vector3::UnitZ();
-    target.offset = 0.0;
+    target = LinearTarget();
   } else {
     *error = "kind: give \"point\", \"set\" or \"linear\"";
     return std::nullopt;
   }
-  try {
-    ValidateTargetConfig(target);
-  } catch (const ScenarioError& e) {
-    std::string location = e.location();
-    if (location.rfind("target.", 0) == 0) location = location.substr(7);
-    *error = location + ": " + e.message();
-    return std::nullopt;
-  }
-  return target;
+  // The page's field names are the scenario's without "target." ("point.s1", "set.normal").
+  return CheckedTarget(
+      target,
+      [](const std::string& location) { return location.rfind("target.", 0) == 0 ? location.substr(7) : location; },
+      error);
 }
 
 CLI::App* AddDashboardCommand(CLI::App& app, DashboardOptions* o) {
@@ -357,7 +323,7 @@ cli::ExitCode RunDashboardCommand(const DashboardOptions& o) {
     auto statuses = participant.MakeReader<msg::ControllerStatus>(
         bench, [&](const msg::ControllerStatus& m, const fdds::SampleInfo&) {
           ControllerStatusReport report;
-          std::string problem = ReadStatus(m, &report);
+          std::string problem = bus::ReadStatus(m, &report);
           std::lock_guard<std::mutex> lock(mutex);
           if (!problem.empty()) return model.OnRefused("dpc_controller_status", problem);
           model.OnStatus(report, now_s());

@@ -275,6 +275,8 @@ cli::ExitCode RunMonitorCommand(const MonitorOptions& o) {
         });
     auto statuses = participant.MakeReader<msg::ControllerStatus>(
         bench, [&](const msg::ControllerStatus& m, const fdds::SampleInfo&) {
+          ControllerStatusReport checked;  // a status with figures no controller sends is not shown
+          if (!bus::ReadStatus(m, &checked).empty()) return;
           std::lock_guard<std::mutex> lock(mutex);
           state.OnStatus(m);
         });

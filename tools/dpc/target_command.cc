@@ -58,6 +58,26 @@ CLI::App* AddTargetCommand(CLI::App& app, TargetOptions* o) {
   return target;
 }
 
+TargetConfig LinearTarget() {
+  TargetConfig target;
+  target.kind = TargetConfig::Kind::kSet;
+  target.normal = Vector3::UnitZ();
+  target.offset = 0.0;
+  return target;
+}
+
+std::optional<TargetConfig> CheckedTarget(TargetConfig target,
+                                          const std::function<std::string(const std::string&)>& field_of,
+                                          std::string* error) {
+  try {
+    ValidateTargetConfig(target);
+  } catch (const ScenarioError& e) {
+    *error = field_of(e.location()) + ": " + e.message();
+    return std::nullopt;
+  }
+  return target;
+}
+
 std::optional<TargetConfig> TargetFromOptions(const TargetOptions& o, std::string* error) {
   TargetConfig target;
   if (!o.point.empty()) {
@@ -76,20 +96,12 @@ std::optional<TargetConfig> TargetFromOptions(const TargetOptions& o, std::strin
     target.normal = Vector3(o.normal[0], o.normal[1], o.normal[2]);
     target.offset = o.offset;
   } else if (o.linear) {
-    target.kind = TargetConfig::Kind::kSet;
-    target.normal = Vector3::UnitZ();
-    target.offset = 0.0;
+    target = LinearTarget();
   } else {
     *error = "give the new target: --point S1 S2 S3, --set-normal N1 N2 N3 [--offset C], or --linear";
     return std::nullopt;
   }
-  try {
-    ValidateTargetConfig(target);
-  } catch (const ScenarioError& e) {
-    *error = FlagOf(e.location(), o.linear) + ": " + e.message();
-    return std::nullopt;
-  }
-  return target;
+  return CheckedTarget(target, [&](const std::string& location) { return FlagOf(location, o.linear); }, error);
 }
 
 cli::ExitCode RunTargetCommand(const TargetOptions& o) {

@@ -17,6 +17,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -37,6 +38,17 @@ struct TargetOptions {
 };
 
 CLI::App* AddTargetCommand(CLI::App& app, TargetOptions* options);
+
+/// The linear-polarization target (the sphere's equator, n = S3, c = 0): `dpc target --linear`
+/// and the dashboard's "linear".
+TargetConfig LinearTarget();
+
+/// `target` validated (ValidateTargetConfig). On a problem returns nullopt with `error` =
+/// "<field>: <message>", the field named by `field_of(location)` (location as ScenarioError
+/// gives it: "target.point.s1", "target.set.normal", …).
+std::optional<TargetConfig> CheckedTarget(TargetConfig target,
+                                          const std::function<std::string(const std::string&)>& field_of,
+                                          std::string* error);
 
 /// The target the flags describe, validated (ValidateTargetConfig). On a problem returns
 /// nullopt with `error` naming the flag ("--point: [1, 1, 0] has |S| = 1.41421356; …").

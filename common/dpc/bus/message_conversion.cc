@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -442,6 +443,51 @@ msg::ControllerStatus StatusMessage(const ControllerStatusReport& status, const 
   out.last_rejection(status.last_rejection.substr(0, 255));
   out.publish_time_ns(status.publish_time_ns);
   return out;
+}
+
+std::string ReadStatus(const msg::ControllerStatus& m, ControllerStatusReport* out) {
+  const std::pair<const char*, double> figures[] = {
+      {"error_deg", m.error_deg()},
+      {"sigma_max", m.sigma_max()},
+      {"sigma_min", m.sigma_min()},
+      {"nullspace_active_fraction", m.nullspace_active_fraction()},
+      {"compute_time_mean_s", m.compute_time_mean_s()},
+      {"compute_time_max_s", m.compute_time_max_s()}};
+  for (const auto& [name, value] : figures) {
+    if (!std::isfinite(value) || value < 0.0) return fmt::format("{} = {} (finite, >= 0)", name, value);
+  }
+  if (m.error_deg() > 180.0) return fmt::format("error_deg = {} (at most 180)", m.error_deg());
+  if (m.nullspace_active_fraction() > 1.0) {
+    return fmt::format("nullspace_active_fraction = {} (at most 1)", m.nullspace_active_fraction());
+  }
+  if (m.controller_id().size() == 0) return "no controller_id";
+  // Text for people: a control character (a terminal escape, a newline) becomes '?'.
+  const auto printable = [](std::string text) {
+    for (char& c : text) {
+      const auto byte = static_cast<unsigned char>(c);
+      if (byte < 0x20 || byte == 0x7f) c = '?';
+    }
+    return text;
+  };
+  out->controller_id = printable(m.controller_id().to_string());
+  out->priority = m.priority();
+  out->law = printable(m.law().to_string());
+  out->obeyed = m.obeyed();
+  out->condition = printable(m.condition().to_string());
+  out->answers_sample = m.answers_sample();
+  out->error_deg = m.error_deg();
+  out->sigma_max = m.sigma_max();
+  out->sigma_min = m.sigma_min();
+  out->nullspace_active_fraction = m.nullspace_active_fraction();
+  out->compute_time_mean_s = m.compute_time_mean_s();
+  out->compute_time_max_s = m.compute_time_max_s();
+  out->updates = m.updates();
+  out->failed_updates = m.failed_updates();
+  out->rejected_samples = m.rejected_samples();
+  out->missed_deadlines = m.missed_deadlines();
+  out->last_rejection = printable(m.last_rejection().to_string());
+  out->publish_time_ns = m.publish_time_ns();
+  return {};
 }
 
 }  // namespace dpc::bus

@@ -63,6 +63,10 @@ std::string ReadTarget(const msg::Target& message, BenchTarget* out);
 TargetConfig TargetFromRequest(const msg::TargetRequest& request);
 
 msg::ControllerStatus StatusMessage(const ControllerStatusReport& status, const std::string& bench_id);
+/// Reads a controller's status into `out`: empty if it is usable (a controller id; every figure
+/// finite and not negative, the error at most 180°, the null-space fraction at most 1); else
+/// why not. A control character in its text (a terminal escape, a newline) becomes '?'.
+std::string ReadStatus(const msg::ControllerStatus& message, ControllerStatusReport* out);
 
 /// Writes a summary into `out` (strings cut to their bounds, the trail to its bound).
 void WriteSummary(const BenchSummary& summary, const std::string& bench_id, msg::BenchSummary* out);

@@ -313,6 +313,68 @@ TEST(StatusMessage, CarriesEveryFieldCutToTheWireBounds) {
   EXPECT_EQ(m.updates(), 42u);
 }
 
+TEST(ReadStatus, RoundTripsWhatAControllerSends) {
+  ControllerStatusReport status;
+  status.controller_id = "main";
+  status.priority = 10;
+  status.law = "gp";
+  status.obeyed = true;
+  status.condition = "tracking";
+  status.answers_sample = 77;
+  status.error_deg = 1.5;
+  status.sigma_max = 2.0;
+  status.sigma_min = 0.5;
+  status.nullspace_active_fraction = 0.25;
+  status.compute_time_mean_s = 1e-6;
+  status.compute_time_max_s = 3e-6;
+  status.updates = 42;
+  status.failed_updates = 1;
+  status.rejected_samples = 2;
+  status.missed_deadlines = 3;
+  status.last_rejection = "a non-unit S_in";
+  status.publish_time_ns = 99;
+  ControllerStatusReport read;
+  ASSERT_EQ(ReadStatus(StatusMessage(status, "b"), &read), "");
+  EXPECT_EQ(read.controller_id, "main");
+  EXPECT_EQ(read.priority, 10);
+  EXPECT_EQ(read.law, "gp");
+  EXPECT_TRUE(read.obeyed);
+  EXPECT_EQ(read.condition, "tracking");
+  EXPECT_EQ(read.answers_sample, 77u);
+  EXPECT_EQ(read.sigma_min, 0.5);
+  EXPECT_EQ(read.nullspace_active_fraction, 0.25);
+  EXPECT_EQ(read.compute_time_max_s, 3e-6);
+  EXPECT_EQ(read.failed_updates, 1u);
+  EXPECT_EQ(read.rejected_samples, 2u);
+  EXPECT_EQ(read.missed_deadlines, 3u);
+  EXPECT_EQ(read.last_rejection, "a non-unit S_in");
+  EXPECT_EQ(read.publish_time_ns, 99);
+}
+
+TEST(ReadStatus, RefusesFiguresNoControllerSendsAndCleansItsText) {
+  ControllerStatusReport good;
+  good.controller_id = "main";
+  const auto refused = [&](auto change) {
+    msg::ControllerStatus m = StatusMessage(good, "b");
+    change(&m);
+    ControllerStatusReport out;
+    return ReadStatus(m, &out);
+  };
+  EXPECT_NE(refused([](msg::ControllerStatus* m) { m->error_deg(std::nan("")); }).find("error_deg"), std::string::npos);
+  EXPECT_NE(refused([](msg::ControllerStatus* m) { m->error_deg(181.0); }).find("at most 180"), std::string::npos);
+  EXPECT_NE(refused([](msg::ControllerStatus* m) { m->sigma_min(-1.0); }).find("sigma_min"), std::string::npos);
+  EXPECT_NE(refused([](msg::ControllerStatus* m) { m->compute_time_max_s(INFINITY); }).find("compute_time_max_s"),
+            std::string::npos);
+  EXPECT_NE(refused([](msg::ControllerStatus* m) { m->nullspace_active_fraction(1.5); }).find("at most 1"),
+            std::string::npos);
+  EXPECT_EQ(refused([](msg::ControllerStatus* m) { m->controller_id(""); }), "no controller_id");
+  msg::ControllerStatus m = StatusMessage(good, "b");
+  m.condition("line\nbreak\x1b[2J");
+  ControllerStatusReport out;
+  ASSERT_EQ(ReadStatus(m, &out), "");
+  EXPECT_EQ(out.condition, "line?break?[2J");
+}
+
 }  // namespace
 }  // namespace dpc::bus
 
