@@ -9,7 +9,12 @@
 #   DPC_DDS_SERVER=ADDR[:PORT]       a CLIENT of that discovery server
 #   DPC_DDS_PEERS=ADDR,ADDR,...      unicast discovery with these fixed peers (no multicast)
 #   DPC_DDS_ADDRESS=ADDR             this container's address (default: `hostname -i`); the UDPv4
-#                                    transport is whitelisted to it and nothing else
+#                                    transport is whitelisted to it and nothing else. The
+#                                    entrypoint waits (DPC_DDS_WAIT_S, 60 s) until the interface
+#                                    holding it is up: Fast DDS drops a whitelisted address whose
+#                                    interface is down (a container on the host's network, e.g.
+#                                    the dashboard, whitelists the bench bridge's gateway, and
+#                                    that bridge is down until a bench container attaches)
 # With none of them, the services use their compiled-in loopback profile (this container only).
 #
 # DDS Security:
@@ -37,11 +42,38 @@ own_address() {
   echo "$address"
 }
 
+# interface_of ADDRESS: the interface whose route covers the IPv4 ADDRESS (/proc/net/route:
+# destination and mask in the kernel's byte order, little-endian here).
+interface_of() {
+  local a b c d address iface destination mask rest
+  [[ $1 != 127.* ]] || { echo lo; return 0; }
+  IFS=. read -r a b c d <<<"$1"
+  address=$((a | b << 8 | c << 16 | d << 24))
+  while read -r iface destination _ _ _ _ _ mask rest; do
+    [[ $iface != Iface && $mask != 00000000 ]] || continue
+    if (((address & 16#$mask) == 16#$destination)); then echo "$iface"; return 0; fi
+  done </proc/net/route
+  return 1
+}
+
+# wait_for_interface ADDRESS: until the interface holding ADDRESS is up (DPC_DDS_WAIT_S).
+wait_for_interface() {
+  local iface="" waited=0
+  until iface=$(interface_of "$1") && [[ "$(cat "/sys/class/net/$iface/operstate" 2>/dev/null)" != down ]]; do
+    ((waited < ${DPC_DDS_WAIT_S:-60} * 5)) ||
+      fail "no interface up with a route to DPC_DDS_ADDRESS=$1${iface:+ ($iface is down)} (is the bench up?)"
+    ((waited)) || echo "dpc-entrypoint: waiting for the interface of $1${iface:+ ($iface)} to come up" >&2
+    waited=$((waited + 1))
+    sleep 0.2
+  done
+}
+
 # client_profile OPTION VARIABLE DESCRIPTION: this container's profile from make_profile.sh
 # --address <own address> OPTION "${!VARIABLE}", used by every participant the command starts.
 client_profile() {
   local address
   address=$(own_address)
+  [[ ! $address =~ ^[0-9]+\.[0-9]+\.[0-9]+\.[0-9]+$ ]] || wait_for_interface "$address"
   "$fastdds_dir/make_profile.sh" --address "$address" "$1" "${!2}" >"$profile" ||
     fail "bad $2=${!2} or DPC_DDS_ADDRESS=$address"
   export FASTRTPS_DEFAULT_PROFILES_FILE="$profile"

@@ -107,11 +107,14 @@ class Project:
         self.base, self.name, self.files = base, name, files
         self.env = dict(os.environ, **env)
 
-    def __call__(self, *args, check=True, timeout=600, capture=True):
+    def command_line(self, *args):
         command = [*self.base, "-p", self.name]
         for f in self.files:
             command += ["-f", os.path.join(REPO, f)]
-        return run([*command, *args], check=check, env=self.env, timeout=timeout, capture=capture)
+        return [*command, *args]
+
+    def __call__(self, *args, check=True, timeout=600, capture=True):
+        return run(self.command_line(*args), check=check, env=self.env, timeout=timeout, capture=capture)
 
     def container(self, service):
         out = self("ps", "-q", service).stdout.strip().splitlines()
@@ -285,3 +288,87 @@ def loop_latencies_us(bench, since):
 
 def max_abs_difference(a, b):
     return max(abs(x - y) for x, y in zip(a, b))
+
+
+# --- the dashboard, as a browser would reach it ----------------------------------------------
+
+def free_port():
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def http_get(port, path="/"):
+    """GET http://127.0.0.1:port/path → (status, headers, body)."""
+    import http.client
+    connection = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
+    try:
+        connection.request("GET", path)
+        response = connection.getresponse()
+        return response.status, dict(response.getheaders()), response.read().decode("utf-8", "replace")
+    finally:
+        connection.close()
+
+
+def dashboard_snapshots(port, wanted, timeout_s=20.0):
+    """Opens the dashboard's WebSocket (/ws) as the page does (its own Origin) and returns the
+    first snapshot for which wanted(snapshot) holds, or the last one seen (None if none)."""
+    import base64
+    import socket
+    import struct
+    key = base64.b64encode(os.urandom(16)).decode()
+    deadline = time.monotonic() + timeout_s
+    last = None
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+        s.sendall((f"GET /ws HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\n"
+                   f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n"
+                   f"Origin: http://127.0.0.1:{port}\r\n\r\n").encode())
+        buffer = b""
+        while b"\r\n\r\n" not in buffer:
+            chunk = s.recv(4096)
+            if not chunk:
+                raise Failure("the dashboard closed the WebSocket handshake")
+            buffer += chunk
+        head, buffer = buffer.split(b"\r\n\r\n", 1)
+        status_line = head.split(b"\r\n")[0]
+        if b" 101 " not in status_line:
+            raise Failure(f"the dashboard refused the WebSocket: {status_line!r}")
+
+        def take(n):
+            nonlocal buffer
+            while len(buffer) < n:
+                chunk = s.recv(65536)
+                if not chunk:
+                    raise Failure("the dashboard closed the WebSocket")
+                buffer += chunk
+            out, buffer = buffer[:n], buffer[n:]
+            return out
+
+        message = b""
+        while time.monotonic() < deadline:
+            first, second = take(2)
+            opcode, length = first & 0x0F, second & 0x7F
+            if length == 126:
+                length = struct.unpack(">H", take(2))[0]
+            elif length == 127:
+                length = struct.unpack(">Q", take(8))[0]
+            payload = take(length)  # a server's frames are not masked
+            if opcode == 8:
+                break
+            if opcode in (9, 10):  # ping/pong: the page's browser answers; not needed here
+                continue
+            message += payload
+            if not first & 0x80:
+                continue
+            text, message = message.decode("utf-8", "replace"), b""
+            try:
+                snapshot = json.loads(text)
+            except ValueError:
+                continue
+            if snapshot.get("type") != "snapshot":
+                continue
+            last = snapshot
+            if wanted(snapshot):
+                return snapshot
+    return last

@@ -8,14 +8,19 @@ Steps (each prints what it saw; the figures at the end are the issue's closing f
      docker-compose, debootstrap) and started (and stopped again at the end, by PID); else the
      test is skipped (exit 77) with the reason.
   2. The base image: deploy/make-base-image.sh builds debian:bookworm-slim where it is missing.
-  3. Build the image; `up` the bench with the standby controller, secured (DDS Security, the
-     credentials made by the pki service); the output locks to the target, seen from the host by
-     `dpc topic echo` (observer identity) through the network's gateway. A container without
+  3. Build the image (no large untagged build-stage image left); `up` the bench with the standby
+     controller and the dashboard, secured (DDS Security, the credentials made by the pki
+     service); the output locks to the target, seen from the host by `dpc topic echo` (observer
+     identity) through the network's gateway. The dashboard service serves its page on the
+     host's 127.0.0.1 and shows the bench LOCKED over its WebSocket. `docker-compose run --rm
+     tools` in a terminal shows the status line and exits 0 on Ctrl-C. A container without
      credentials, and one with the observer identity, fail to change the target; the operator
      identity changes it.
   4. `kill` of the controller container: the standby takes over, the output stays locked.
   5. `docker network disconnect` of the solver for longer than the deadlines: the driver holds
-     and says why; reconnect: control resumes from the held φ, without a jump.
+     and says why; reconnect: control resumes from the held φ, without a jump. `stop` of the
+     only controller left: the driver keeps publishing its holding state (heartbeat) and says
+     that no controller is connected.
   6. `down` leaves no container, network or volume of the project.
   7. Split deployment: the bench and the solver as two compose projects, secured (fixed peers,
      the solver with the bench's controller-remote identity), then open through the bench's
@@ -25,6 +30,7 @@ whitelisted to the bridge's gateway only.
 """
 
 import argparse
+import glob
 import json
 import os
 import shutil
@@ -36,8 +42,8 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from compose_support import (  # noqa: E402
     BENCH_ID, DOMAIN, IMAGE, PREFIX, REPO, SKIP, SPLIT_PREFIX, Bench, Engine, Failure, Project,
-    compose_command, cyclone_reads, expect, host_profile, log, loop_latencies_us, max_abs_difference,
-    run)
+    compose_command, cyclone_reads, dashboard_snapshots, expect, free_port, host_profile, http_get, log,
+    loop_latencies_us, max_abs_difference, run)
 
 
 def attempts_to_command(project):
@@ -58,20 +64,95 @@ def attempts_to_command(project):
                                    f"{(result.stdout or '').strip().splitlines()[-4:]})")
 
 
+def dangling_images():
+    """Untagged images: id → size in bytes."""
+    out = run(["docker", "images", "-f", "dangling=true", "--format", "{{.ID}}"]).stdout.split()
+    if not out:
+        return {}
+    sizes = run(["docker", "image", "inspect", "-f", "{{.Id}} {{.Size}}", *out]).stdout.split("\n")
+    return {line.split()[0]: int(line.split()[1]) for line in sizes if line.strip()}
+
+
+def dashboard_checks(port, figures):
+    """The compose dashboard service, as a browser on the host reaches it: its page on
+    127.0.0.1, and live snapshots of the locked bench over its WebSocket."""
+    deadline = time.monotonic() + 60
+    status = None
+    while time.monotonic() < deadline:
+        try:
+            status, headers, body = http_get(port, "/")
+            break
+        except OSError:
+            time.sleep(0.5)
+    expect(status == 200 and "dashboard.js" in body,
+           f"the dashboard service serves its page on the host's 127.0.0.1:{port} (HTTP {status})")
+    snapshot = dashboard_snapshots(port, lambda s: s.get("condition") == "LOCKED"
+                                   and (s.get("samples") or {}).get("rate_hz", 0) > 0, timeout_s=30)
+    expect(snapshot is not None and snapshot.get("condition") == "LOCKED",
+           f"the dashboard shows the bench LOCKED, fed through the bench network's gateway "
+           f"({None if snapshot is None else (snapshot.get('condition'), snapshot.get('samples'))})")
+    figures["dashboard_sample_rate_hz"] = snapshot["samples"]["rate_hz"]
+    log(f"dashboard: LOCKED, {snapshot['samples']['rate_hz']:.0f} samples/s, "
+        f"error {snapshot['error_deg']['mean']:.2f}° mean")
+
+
+def tools_monitor_ends_on_ctrl_c(project):
+    """`docker-compose run --rm tools` in a terminal: the status line comes, Ctrl-C ends it, exit 0."""
+    import pty
+    import select
+    pid, fd = pty.fork()
+    if pid == 0:
+        command = project.command_line("run", "--rm", "tools")
+        os.execvpe(command[0], command, project.env)
+    seen = b""
+    deadline = time.monotonic() + 90
+    while time.monotonic() < deadline and b"LOCKED" not in seen:
+        ready, _, _ = select.select([fd], [], [], 0.5)
+        if ready:
+            try:
+                seen += os.read(fd, 4096)
+            except OSError:
+                break
+    expect(b"LOCKED" in seen, f"`run --rm tools` shows the status line ({seen[-200:]!r})")
+    os.write(fd, b"\x03")
+    code = None
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        try:
+            ready, _, _ = select.select([fd], [], [], 0.5)
+            if ready:
+                seen += os.read(fd, 4096)
+        except OSError:
+            pass
+        done, status = os.waitpid(pid, os.WNOHANG)
+        if done:
+            code = os.waitstatus_to_exitcode(status)
+            break
+    if code is None:
+        os.kill(pid, signal.SIGKILL)
+        os.waitpid(pid, 0)
+    os.close(fd)
+    expect(code == 0, f"Ctrl-C ends `docker-compose run --rm tools` with exit 0 (exit {code}; {seen[-160:]!r})")
+
+
 def failover_and_hold(args, base, work):
     figures = {}
+    dashboard_port = free_port()
     pki = os.path.join(work, "pki")
     project = Project(base, "dpcsystest", ["docker-compose.yml"], {
         "DPC_NET_PREFIX": PREFIX, "DPC_IMAGE": IMAGE, "DPC_DOMAIN": DOMAIN, "DPC_BENCH_ID": BENCH_ID,
         "DPC_RATE_HZ": str(args.rate_hz), "DPC_SCRAMBLER_RAD_PER_S": str(args.scrambler_rad_per_s),
-        "COMPOSE_PROFILES": "standby", "DPC_PKI_DIR": pki})
+        "COMPOSE_PROFILES": "standby", "DPC_PKI_DIR": pki, "DPC_DASHBOARD_PORT": str(dashboard_port)})
     project.down()
     bench = None
     try:
         log("build (first build compiles the services: minutes on 2 cores)")
         started = time.monotonic()
+        dangling_before = dangling_images()
         project("build", capture=False, timeout=3600)
         figures["build_s"] = time.monotonic() - started
+        left = {i: size for i, size in dangling_images().items() if i not in dangling_before and size > 300e6}
+        expect(not left, f"the build left no large untagged image behind ({left or 'none'})")
         size = int(run(["docker", "image", "inspect", "-f", "{{.Size}}", IMAGE]).stdout.strip())
         figures["image_mb"] = size / 1e6
         base_image = project.env.get("DPC_BASE_IMAGE", "debian:bookworm-slim")
@@ -117,6 +198,8 @@ def failover_and_hold(args, base, work):
                f"the network {network} is internal, subnet {subnets} (no route out of the machine)")
         if args.cyclone_probe:
             cyclone_reads(args.cyclone_probe, PREFIX, work, secure=True)
+        dashboard_checks(dashboard_port, figures)
+        tools_monitor_ends_on_ctrl_c(project)
         attempts_to_command(project)
 
         # --- kill of the controller container → the standby takes over ---------------------------
@@ -196,6 +279,19 @@ def failover_and_hold(args, base, work):
         figures["relock_after_reconnect_s"] = bench.locked_since(reconnect, window_s=0.5) - 0.5 - reconnect
         log(f"ok: locked again (a 0.5 s window within 2° began {figures['relock_after_reconnect_s']:.2f} s after the reconnect)")
 
+        # --- `stop` of the only controller left → the driver keeps publishing its hold -------------
+        log("docker-compose stop of the only controller left (the standby)")
+        project("stop", "-t", "10", "controller-standby")
+        stopped = time.monotonic()
+        bench.wait(lambda: "no controller connected" in (bench.latest_state() or {}).get("reason", ""), 15,
+                   "the driver to say that no controller is left")
+        time.sleep(2.0)
+        held = [m for t, m in bench.states.snapshot(time.monotonic() - 2.0) if m["mode"] == "DRIVER_HOLDING"]
+        figures["holding_states_per_s_without_controller"] = len(held) / 2.0
+        expect(len(held) >= 50, f"the driver publishes its holding state while no controller runs "
+                                f"({len(held)} in the last 2 s, {time.monotonic() - stopped:.1f} s after the stop; "
+                                f"\"{held[-1]['reason'] if held else ''}\")")
+
         # --- SIGTERM: every service ends by itself, cleanly --------------------------------------
         containers = project("ps", "-q").stdout.split()
         stop_started = time.monotonic()
@@ -274,11 +370,20 @@ def split_deployment(args, base, work, secure):
                f"the bench obeys the solver's controller ({kind}), locked "
                f"{figures[f'{key}_up_to_locked_s']:.2f} s after its `up`")
         down_started = time.monotonic()
-        solver_project("down", "-t", "10")
-        bench_project("down", "-t", "10")
+        if secure:  # the documented teardown, solver first …
+            solver_project("down", "-t", "10")
+            bench_project("down", "-t", "10")
+        else:  # … or bench first: its network stays while the solver is attached; a second `down` removes it
+            bench_project("down", "-t", "10", check=False)
+            solver_project("down", "-t", "10")
+            bench_project("down", "-t", "10")
         figures[f"{key}_down_s"] = time.monotonic() - down_started
         expect(figures[f"{key}_down_s"] < 16,
-               f"both projects went down without kill timeouts ({figures[f'{key}_down_s']:.2f} s)")
+               f"both projects went down ({'solver' if secure else 'bench'} first) without kill timeouts "
+               f"({figures[f'{key}_down_s']:.2f} s)")
+        leftovers = {**solver_project.leftovers(), **bench_project.leftovers()}
+        expect(not leftovers, f"the documented teardown, {'solver' if secure else 'bench'} first, left nothing "
+                              f"({leftovers or 'none'})")
     finally:
         if bench:
             bench.stop()
@@ -316,6 +421,13 @@ def main():
         run(["apt-get", "install", "-y", "-qq", "docker-compose"], timeout=900)
         base = compose_command()
     log(f"compose: {' '.join(base)}; engine {run(['docker', 'version', '-f', '{{.Server.Version}}']).stdout.strip()}")
+    # Behind a TLS-intercepting proxy (the host trusts its CA in /usr/local/share/ca-certificates),
+    # the image's build step needs that CA for npm: docker-compose passes DPC_BUILD_CA_PEM.
+    extra_cas = sorted(glob.glob("/usr/local/share/ca-certificates/**/*.crt", recursive=True))
+    if extra_cas and not os.environ.get("DPC_BUILD_CA_PEM"):
+        # (as the README's "$(cat …/*.crt)" gives it: the same build argument, the same build cache)
+        os.environ["DPC_BUILD_CA_PEM"] = "".join(open(path).read() for path in extra_cas).rstrip("\n")
+        log(f"the image's build trusts the host's extra CAs for npm: {', '.join(extra_cas)}")
     work = tempfile.mkdtemp(prefix="dpc-compose-test-")
     try:
         run([os.path.join(REPO, "deploy", "make-base-image.sh")], capture=False, timeout=1200)
