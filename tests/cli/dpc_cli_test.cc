@@ -182,6 +182,22 @@ TEST_F(DpcCliTest, BadFlagsAreRejectedNamingTheFlag) {
   EXPECT_EQ(r.exit_code, 2);
   r = Run("frobnicate");
   EXPECT_EQ(r.exit_code, 2);
+  // Values CLI11 would otherwise take: a negative seed wraps to 2^64 − 1, an empty rate list
+  // becomes 0 rad/s, no or a negative number of workers.
+  r = Run("sim --seed -1 --duration-s 1e-4");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--seed"), std::string::npos) << r.err;
+  r = Dpc({"sweep", "--rates", "", "--duration-s", "1e-4"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--rates"), std::string::npos) << r.err;
+  for (const char* jobs : {"0", "-3"}) {
+    r = Dpc({"sweep", "--jobs", jobs, "--duration-s", "1e-4"});
+    EXPECT_EQ(r.exit_code, 2) << jobs;
+    EXPECT_NE(r.err.find("--jobs"), std::string::npos) << r.err;
+  }
+  r = Dpc({"sweep", "--seeds", "1,-2", "--duration-s", "1e-4"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--seeds"), std::string::npos) << r.err;
 }
 
 TEST_F(DpcCliTest, InterruptStopsALongRunAndKeepsWhatWasRecorded) {

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <map>
 
+#include "dpc/cli/command_line.h"
 #include "dpc/config/scenario_error.h"
 #include "dpc/config/scenario_validation.h"
 #include "dpc/control/control_law_factory.h"
@@ -60,10 +61,12 @@ CLI::App* AddSweepCommand(CLI::App& app, SweepOptions* o) {
       ->check(CLI::ExistingFile);
   o->overrides.AddTo(*sweep);
   sweep->add_option("--rates", o->rates_rad_per_s, "Input rotation rates (rad/s), comma separated")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(CLI::NonNegativeNumber);
   sweep->add_option("--methods", o->methods, "Control laws, comma separated")->delimiter(',');
   sweep->add_option("--seeds", o->seeds, "Seeds, comma separated (default: the scenario's)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(cli::UnsignedInteger());
   sweep->add_option("--devices", o->devices,
                     "Stage axes per device, comma separated (e.g. 131,3131)")
       ->delimiter(',');
@@ -76,7 +79,7 @@ CLI::App* AddSweepCommand(CLI::App& app, SweepOptions* o) {
                     "Dashed reference lines on the plot at these errors (deg), e.g. 1.15 "
                     "(40 dB extinction)")
       ->delimiter(',');
-  sweep->add_option("--jobs", o->jobs, "Worker threads (default: all cores)");
+  sweep->add_option("--jobs", o->jobs, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
   sweep->add_flag("--json", o->json, "Print one JSON object per run (JSON lines)");
   sweep->add_option("--csv", o->csv_path, "Write the aggregated table as CSV");
   sweep->add_option("--plot", o->plot_path, "Draw mean error against rate (log-log) to this PNG");

@@ -118,4 +118,19 @@ size_t EditDistance(const std::string& a, const std::string& b) {
   return row[b.size()];
 }
 
+const CLI::Validator& UnsignedInteger() {
+  static const CLI::Validator validator(
+      [](std::string& text) -> std::string {
+        if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos) {
+          return "'" + text + "' is not a non-negative integer";
+        }
+        if (text.size() > 20 || (text.size() == 20 && text > "18446744073709551615")) {
+          return "'" + text + "' is larger than 18446744073709551615";
+        }
+        return {};
+      },
+      "UINT", "UnsignedInteger");
+  return validator;
+}
+
 }  // namespace dpc::cli

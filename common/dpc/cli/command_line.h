@@ -29,4 +29,8 @@ std::string UnknownNameProblem(const CLI::App& app, const std::vector<std::strin
 /// The number of single-character edits between `a` and `b` (Levenshtein distance).
 size_t EditDistance(const std::string& a, const std::string& b);
 
+/// A validator for unsigned integer options (seeds): digits only, so that "-1" is refused
+/// instead of wrapping to 2^64 − 1 (CLI11 converts it).
+const CLI::Validator& UnsignedInteger();
+
 }  // namespace dpc::cli

@@ -120,7 +120,9 @@ nlohmann::ordered_json RunReportJson(const RunDescription& run, const Simulation
   j["lock_time_s"] = Optional(r.lock_time_s);
   j["first_lock_time_s"] = Optional(r.first_lock_time_s);
   j["excursions"] = r.excursions;
+  j["threshold_crossings"] = r.threshold_crossings;
   j["statistics_from_s"] = Number(r.statistics_start_s);
+  j["statistics_to_s"] = Number(r.statistics_end_s);
   j["statistics_samples"] = r.statistics_samples;
   j["phi_min"] = Array(r.phi_min);
   j["phi_max"] = Array(r.phi_max);
@@ -164,14 +166,28 @@ std::string RunReportText(const RunDescription& run, const SimulationResult& res
                       s.controller.activation_s * 1e3, result.stopped_early ? " (stopped early)" : "");
   text += fmt::format("speed      {:.3g} M samples/s ({:.3g} s, {} loop)\n",
                       result.samples_per_s / 1e6, result.wall_time_s, run.loop_kernel);
-  text += fmt::format("lock       {} (first below {:g}° after {}, {} excursions)\n",
-                      FormatOptional(r.lock_time_s, 1e3, "ms after activation"),
-                      s.simulation.lock_threshold_deg, FormatOptional(r.first_lock_time_s, 1e3, "ms"),
-                      r.excursions);
+  // The first lock first; excursions counted with hysteresis (the raw crossings beside them);
+  // the last relock only when it is not the first lock.
+  const double threshold_deg = s.simulation.lock_threshold_deg;
+  if (!r.first_lock_time_s) {
+    text += fmt::format("lock       never below {:g}°\n", threshold_deg);
+  } else {
+  text += fmt::format("lock       first below {:g}° after {}; {} excursion{} above it (a new one after the error "
+                      "fell below {:g}°; {} crossings)",
+                      threshold_deg, FormatOptional(r.first_lock_time_s, 1e3, "ms"), r.excursions,
+                      r.excursions == 1 ? "" : "s", threshold_deg / 2, r.threshold_crossings);
+  if (!r.lock_time_s) {
+    text += "; above it at the end\n";
+  } else if (*r.lock_time_s > *r.first_lock_time_s) {
+    text += fmt::format("; below since {}\n", FormatOptional(r.lock_time_s, 1e3, "ms"));
+  } else {
+    text += "; below ever since\n";
+  }
+  }
   text += fmt::format("error      mean {:.3f}°  p50 {:.3f}°  p99 {:.3f}°  max {:.3f}°  "
-                      "(from {:.4g} ms, {} samples)\n",
+                      "(window {:.4g}–{:.4g} ms, {} samples)\n",
                       r.error_deg.mean, r.error_deg.p50, r.error_deg.p99, r.error_deg.max,
-                      r.statistics_start_s * 1e3, r.statistics_samples);
+                      r.statistics_start_s * 1e3, r.statistics_end_s * 1e3, r.statistics_samples);
   text += fmt::format("extinction mean {:.2f} dB, power-averaged {:.2f} dB\n", r.extinction_db_mean,
                       r.extinction_db_power_mean);
   text += fmt::format("phi        min [{}]\n           max [{}]\n           p1  [{}]\n"

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include "dpc/cli/command_line.h"
 #include "dpc/config/scenario_error.h"
 
 namespace dpc::cli {
@@ -48,7 +49,7 @@ void ScenarioOverrides::AddTo(CLI::App& app) {
   app.add_option("--duration-s", duration_s, "Simulated time (s)");
   app.add_option("--delay-s", delay_s, "Loop delay (s), a whole number of samples");
   app.add_option("--sample-rate-hz", sample_rate_hz, "Sample rate (Hz)");
-  app.add_option("--seed", seed, "Random seed");
+  app.add_option("--seed", seed, "Random seed (0 … 2^64 − 1)")->check(UnsignedInteger());
   app.add_option("--noise-deg", noise_deg, "Polarimeter noise sigma per tangent axis (deg)");
   app.add_option("--lock-threshold-deg", lock_threshold_deg,
                  "Lock: the error stays below this (deg); default 10");

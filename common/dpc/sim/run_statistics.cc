@@ -39,6 +39,7 @@ RunStatistics::RunStatistics(const Target& target, int control_count, double act
       settle_s_(settle_s),
       pending_phi_(static_cast<size_t>(kBatch) * static_cast<size_t>(control_count)),
       error_deg_(1e-12, 360.0) {
+  rearm_rad_ = 0.5 * lock_threshold_rad_;
   phi_.reserve(control_count);
   for (int c = 0; c < control_count; ++c) phi_.emplace_back(1e-12, 1e12);
 }
@@ -89,8 +90,13 @@ void RunStatistics::Flush() const {
       below_since_s_ = t_s;
       if (!first_lock_s_) first_lock_s_ = t_s;
     } else if (!below && below_) {
-      ++excursions_;
+      ++threshold_crossings_;
+      if (armed_) {
+        ++excursions_;
+        armed_ = false;
+      }
     }
+    if (error_rad[i] < rearm_rad_) armed_ = true;
     below_ = below;
     if (!window_open_) {
       window_open_ = fixed_start_s_ ? t_s >= *fixed_start_s_
@@ -98,6 +104,7 @@ void RunStatistics::Flush() const {
       if (window_open_) window_start_s_ = t_s;
     }
     if (window_open_) {
+      window_end_s_ = t_s;
       window_error_deg[window_count] = error_rad[i] * kRadToDeg;
       window_leak[window_count] = std::max(leak[i], kLeakFloor);
       leak_batch[window_count & 1] += leak[i];
@@ -119,6 +126,7 @@ RunSummary RunStatistics::Summarize(int64_t samples, int64_t resets) const {
   s.samples = samples;
   s.statistics_samples = error_deg_.count();
   s.statistics_start_s = window_start_s_;
+  s.statistics_end_s = window_end_s_;
   if (error_deg_.count() > 0) {
     s.error_deg = {error_deg_.mean(), error_deg_.Percentile(50.0), error_deg_.Percentile(99.0),
                    error_deg_.max()};
@@ -134,6 +142,7 @@ RunSummary RunStatistics::Summarize(int64_t samples, int64_t resets) const {
   if (below_) s.lock_time_s = below_since_s_ - activation_s_;
   if (first_lock_s_) s.first_lock_time_s = *first_lock_s_ - activation_s_;
   s.excursions = excursions_;
+  s.threshold_crossings = threshold_crossings_;
   for (const auto& h : phi_) {
     s.phi_min.push_back(h.count() ? h.min() : NAN);
     s.phi_max.push_back(h.count() ? h.max() : NAN);

@@ -10,10 +10,14 @@
 //                  extinction_db_mean        mean over samples of 10·log10(L) (L floored at 1e-20;
 //                                            Σ ln L through LogSumAccumulator, no log per sample)
 //                  extinction_db_power_mean  10·log10(mean L): what a power meter would read
-//   lock         "locked" from the start of the last stretch that stays below the lock threshold
-//                until the end of the run; lock_time_s counts from activation (unset if the
-//                last sample is above the threshold). first_lock_time_s: the first time below.
-//                excursions: upward crossings of the threshold after the first lock.
+//   lock         first_lock_time_s: the first time below the lock threshold (from activation).
+//                excursions: rises above the threshold counted with hysteresis, as other
+//                implementations count them: a new excursion only after the error fell below
+//                half the threshold (a noisy error hovering at the threshold is one excursion,
+//                not hundreds); threshold_crossings: every upward crossing after the first lock.
+//                lock_time_s: the start of the last stretch that stays below the threshold until
+//                the end of the run (unset if the last sample is above it): on a long run with
+//                excursions that is the last relock, not the first lock.
 //   controls     min, max, 1st and 99th percentiles of each applied φ_i, from activation on
 //   controller   fraction of updates with the null-space term active, failed and clamped
 //                updates, the smallest σ_min of the task Jacobian and the fraction of updates
@@ -41,12 +45,14 @@ struct RunSummary {
   int64_t samples = 0;              ///< simulated samples
   int64_t statistics_samples = 0;   ///< samples in the error statistics window
   double statistics_start_s = 0.0;  ///< start of that window (NaN if empty)
+  double statistics_end_s = 0.0;    ///< its last sample's time (NaN if empty)
   ErrorSummary error_deg;
   double extinction_db_mean = 0.0;
   double extinction_db_power_mean = 0.0;
   std::optional<double> lock_time_s;
   std::optional<double> first_lock_time_s;
-  int64_t excursions = 0;
+  int64_t excursions = 0;           ///< with hysteresis (see above)
+  int64_t threshold_crossings = 0;  ///< every upward crossing after the first lock
   std::vector<double> phi_min, phi_max, phi_p1, phi_p99;
   int64_t updates = 0;  ///< controller updates (samples from activation on)
   double nullspace_active_fraction = 0.0;
@@ -114,6 +120,7 @@ class RunStatistics {
   // Error window.
   mutable bool window_open_ = false;
   mutable double window_start_s_ = NAN;
+  mutable double window_end_s_ = NAN;
   mutable LogHistogram error_deg_;
   mutable LogSumAccumulator leak_log_sum_;  ///< Σ ln(leak), for the mean in dB
   mutable double leak_sum_ = 0.0, leak_compensation_ = 0.0;
@@ -123,6 +130,9 @@ class RunStatistics {
   mutable double below_since_s_ = NAN;
   mutable std::optional<double> first_lock_s_;
   mutable int64_t excursions_ = 0;
+  mutable int64_t threshold_crossings_ = 0;
+  mutable bool armed_ = false;  ///< the error fell below half the threshold since the last excursion
+  double rearm_rad_;            ///< half the lock threshold
 
   // Controls and controller.
   mutable std::vector<LogHistogram> phi_;

@@ -15,7 +15,8 @@ constexpr double kTolerance = 1e-15;
 // Every field of README.md's "dpc sim output" table.
 const char* const kReadmeResultFields[] = {
     "error_deg", "extinction_db_mean", "extinction_db_power_mean", "lock_time_s",
-    "first_lock_time_s", "excursions", "phi_min", "phi_max", "phi_p1", "phi_p99",
+    "first_lock_time_s", "excursions", "threshold_crossings", "statistics_from_s", "statistics_to_s",
+    "statistics_samples", "phi_min", "phi_max", "phi_p1", "phi_p99",
     "nullspace_active_fraction", "resets", "failed_updates", "rank_deficient_updates",
     "clamped_updates", "sigma_min_min", "near_singular_fraction", "samples", "samples_per_s"};
 
@@ -110,6 +111,9 @@ TEST_F(JsonReportTest, ReportCarriesTheResults) {
   EXPECT_EQ(j["updates"], r.updates);
   EXPECT_EQ(j["statistics_samples"], r.statistics_samples);
   EXPECT_EQ(j["excursions"], r.excursions);
+  EXPECT_EQ(j["threshold_crossings"], r.threshold_crossings);
+  EXPECT_GE(r.threshold_crossings, r.excursions);
+  EXPECT_NEAR(j["statistics_to_s"].get<double>(), r.statistics_end_s, kTolerance);
   EXPECT_EQ(j["failed_updates"], r.failed_updates);
   EXPECT_EQ(j["resets"], r.resets);
   EXPECT_NEAR(j["lock_threshold_deg"].get<double>(), 10.0, kTolerance);

@@ -46,6 +46,26 @@ TEST(RunStatisticsTest, LockTimeIsTheStartOfTheFinalStretchBelowThreshold) {
   EXPECT_NEAR(s.error_deg.max, 30.0, 1e-9);
 }
 
+TEST(RunStatisticsTest, ExcursionsAreCountedWithHysteresisAndCrossingsBesideThem) {
+  RunStatistics stats(kTarget, 2, 0.0, 10.0, std::nullopt);
+  // Locked (3° < 5°: armed), then hovering about the threshold: three crossings, one excursion;
+  // below half the threshold again (4°), then up: a second excursion.
+  const double errors_deg[] = {50, 3, 11, 9, 11, 9, 11, 9, 6, 12, 4, 12, 2};
+  const int n = static_cast<int>(std::size(errors_deg));
+  for (int k = 0; k < n; ++k) stats.AddSample(0.1 * k, At(errors_deg[k] * kDeg), Phi(0, 0));
+  const RunSummary s = stats.Summarize(n, 0);
+  EXPECT_EQ(s.threshold_crossings, 5);
+  EXPECT_EQ(s.excursions, 2);
+  ASSERT_TRUE(s.first_lock_time_s.has_value());
+  EXPECT_NEAR(*s.first_lock_time_s, 0.1, 1e-12);
+  ASSERT_TRUE(s.lock_time_s.has_value());  // the last relock, not the first lock
+  EXPECT_NEAR(*s.lock_time_s, 1.2, 1e-12);
+  // The window: from the first lock to the last sample.
+  EXPECT_NEAR(s.statistics_start_s, 0.1, 1e-12);
+  EXPECT_NEAR(s.statistics_end_s, 1.2, 1e-12);
+  EXPECT_EQ(s.statistics_samples, n - 1);
+}
+
 TEST(RunStatisticsTest, SettlingTimeLeavesTheLockInTransientOut) {
   RunStatistics stats(kTarget, 2, 0.0, 10.0, std::nullopt, 0.25);
   const double errors_deg[] = {50, 9, 6, 3, 1, 1, 1};  // first lock at t = 0.1
