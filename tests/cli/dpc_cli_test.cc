@@ -200,6 +200,42 @@ TEST_F(DpcCliTest, BadFlagsAreRejectedNamingTheFlag) {
   EXPECT_NE(r.err.find("--seeds"), std::string::npos) << r.err;
 }
 
+TEST_F(DpcCliTest, SeedsRunOncePerSeedAndReportTheSpreadOverThem) {
+  const Result r = Run("sim " + Scenario("paper_fig3") + " --duration-s 4e-3 --seeds 1-2,5 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["seeds"], nlohmann::json({1, 2, 5}));
+  EXPECT_EQ(j["runs_completed"], 3);
+  ASSERT_EQ(j["runs"].size(), 3u);
+  double sum = 0.0, lo = INFINITY, hi = -INFINITY;
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(j["runs"][i]["seed"], j["seeds"][i]);
+    const double mean = j["runs"][i]["error_deg"]["mean"].get<double>();
+    sum += mean;
+    lo = std::min(lo, mean);
+    hi = std::max(hi, mean);
+  }
+  const auto& over = j["over_seeds"]["error_deg_mean"];
+  EXPECT_NEAR(over["mean"].get<double>(), sum / 3.0, 1e-12);
+  EXPECT_EQ(over["min"].get<double>(), lo);
+  EXPECT_EQ(over["max"].get<double>(), hi);
+  EXPECT_GT(over["sd"].get<double>(), 0.0) << "three seeds give three different runs";
+  // The same run as a single `dpc sim --seed 5`.
+  const Result single = Run("sim " + Scenario("paper_fig3") + " --duration-s 4e-3 --seed 5 --json");
+  ASSERT_EQ(single.exit_code, 0) << single.err;
+  EXPECT_EQ(nlohmann::json::parse(single.out)["error_deg"], j["runs"][2]["error_deg"]);
+  // Text: one line per seed, then the spread; and the flags it cannot go with.
+  const Result text = Run("sim " + Scenario("paper_fig3") + " --duration-s 4e-3 --seeds 1-2");
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_NE(text.out.find("seed 2"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("over 2 seeds"), std::string::npos) << text.out;
+  EXPECT_EQ(Run("sim --seeds 1-2 --seed 3").exit_code, 2);
+  EXPECT_EQ(Run("sim --seeds 1-2 --plot x.png").exit_code, 2);
+  const Result bad = Run("sim --seeds 3-1");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--seeds"), std::string::npos) << bad.err;
+}
+
 TEST_F(DpcCliTest, InterruptStopsALongRunAndKeepsWhatWasRecorded) {
   // 1e9 samples would take minutes; SIGINT once it has simulated for a second of CPU time ends
   // the run at the next progress check.

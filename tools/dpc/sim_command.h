@@ -23,6 +23,7 @@ struct SimOptions {
   bool progress = false;
   bool no_progress = false;
   bool print_scenario = false;
+  std::string seeds;  ///< "1-10", "1,2,5-7": one run per seed, reported with the spread over them
 };
 
 /// Adds the `sim` subcommand to `app`, storing its options in `options`.

@@ -64,9 +64,7 @@ CLI::App* AddSweepCommand(CLI::App& app, SweepOptions* o) {
       ->delimiter(',')
       ->check(CLI::NonNegativeNumber);
   sweep->add_option("--methods", o->methods, "Control laws, comma separated")->delimiter(',');
-  sweep->add_option("--seeds", o->seeds, "Seeds, comma separated (default: the scenario's)")
-      ->delimiter(',')
-      ->check(cli::UnsignedInteger());
+  sweep->add_option("--seeds", o->seeds, "Seeds: a list and ranges, e.g. 1-10 or 1,2,5-7 (default: the scenario's)");
   sweep->add_option("--devices", o->devices,
                     "Stage axes per device, comma separated (e.g. 131,3131)")
       ->delimiter(',');
@@ -101,7 +99,13 @@ cli::ExitCode RunSweepCommand(const SweepOptions& o) {
   if (methods.empty()) methods.push_back(std::string(MethodName(base.controller.method)));
   std::vector<double> rates = o.rates_rad_per_s;
   if (rates.empty()) rates.push_back(cli::InputRateRadPerS(base));
-  std::vector<uint64_t> seeds = o.seeds;
+  std::vector<uint64_t> seeds;
+  try {
+    if (!o.seeds.empty()) seeds = cli::ParseSeedList(o.seeds);
+  } catch (const std::invalid_argument& e) {
+    fmt::print(stderr, "dpc sweep: --seeds: {}\n", e.what());
+    return cli::ExitCode::kInvalidInput;
+  }
   if (seeds.empty()) seeds.push_back(base.simulation.seed);
   std::vector<std::string> predictions = o.predictions;
   if (predictions.empty()) predictions.push_back("");

@@ -19,7 +19,7 @@ struct SweepOptions {
   cli::ScenarioOverrides overrides;
   std::vector<double> rates_rad_per_s;
   std::vector<std::string> methods;
-  std::vector<uint64_t> seeds;
+  std::string seeds;  ///< "1-10", "1,2,5-7" (cli::ParseSeedList); empty: the scenario's seed
   std::vector<std::string> devices;
   std::vector<std::string> predictions;  ///< "off", "on"; empty: as the scenario and flags say
   std::vector<double> reference_deg;

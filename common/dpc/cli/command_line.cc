@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <numeric>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -116,6 +117,41 @@ size_t EditDistance(const std::string& a, const std::string& b) {
     }
   }
   return row[b.size()];
+}
+
+std::vector<uint64_t> ParseSeedList(const std::string& text, size_t max_count) {
+  const auto number = [&](const std::string& item) {
+    std::string copy = item;
+    if (std::string problem = UnsignedInteger().operator()(copy); !problem.empty()) {
+      throw std::invalid_argument(problem);
+    }
+    return static_cast<uint64_t>(std::stoull(item));
+  };
+  std::vector<uint64_t> seeds;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = std::min(text.find(',', start), text.size());
+    const std::string item = text.substr(start, comma - start);
+    const size_t dash = item.find('-', 1);
+    if (item.empty()) throw std::invalid_argument("an empty item in '" + text + "'");
+    if (dash == std::string::npos) {
+      seeds.push_back(number(item));
+    } else {
+      const uint64_t first = number(item.substr(0, dash));
+      const uint64_t last = number(item.substr(dash + 1));
+      if (last < first) throw std::invalid_argument("the range '" + item + "' ends before it starts");
+      if (last - first >= max_count) {
+        throw std::invalid_argument(fmt::format("'{}' holds more than {} seeds", item, max_count));
+      }
+      for (uint64_t seed = first;; ++seed) {
+        seeds.push_back(seed);
+        if (seed == last) break;
+      }
+    }
+    if (seeds.size() > max_count) throw std::invalid_argument(fmt::format("more than {} seeds", max_count));
+    start = comma + 1;
+  }
+  return seeds;
 }
 
 const CLI::Validator& UnsignedInteger() {

@@ -5,6 +5,7 @@
 // something else ("dpc simm": "A subcommand is required"; "dpc sim --metod gp": "File does not
 // exist: gp", the flag's value taken for the scenario).
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -32,5 +33,10 @@ size_t EditDistance(const std::string& a, const std::string& b);
 /// A validator for unsigned integer options (seeds): digits only, so that "-1" is refused
 /// instead of wrapping to 2^64 − 1 (CLI11 converts it).
 const CLI::Validator& UnsignedInteger();
+
+/// Seeds from a list of values and ranges: "3", "1,2,7", "1-10", "1-3,8". Throws
+/// std::invalid_argument naming the bad item (not a non-negative integer, a range whose end is
+/// before its start) or when the list holds more than `max_count` seeds.
+std::vector<uint64_t> ParseSeedList(const std::string& text, size_t max_count = 10000);
 
 }  // namespace dpc::cli

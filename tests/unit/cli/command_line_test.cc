@@ -64,5 +64,21 @@ TEST(VersionTextTest, NamesTheProgramTheProjectAndFastDds) {
   EXPECT_NE(text.find("Fast DDS 2."), std::string::npos) << text;
 }
 
+TEST(ParseSeedListTest, TakesValuesAndRanges) {
+  EXPECT_EQ(ParseSeedList("3"), (std::vector<uint64_t>{3}));
+  EXPECT_EQ(ParseSeedList("1-4"), (std::vector<uint64_t>{1, 2, 3, 4}));
+  EXPECT_EQ(ParseSeedList("1,2,7-8"), (std::vector<uint64_t>{1, 2, 7, 8}));
+  EXPECT_EQ(ParseSeedList("18446744073709551615"), (std::vector<uint64_t>{18446744073709551615ull}));
+  EXPECT_EQ(ParseSeedList("18446744073709551614-18446744073709551615").size(), 2u);  // no wrap at the end
+}
+
+TEST(ParseSeedListTest, RefusesWhatIsNotASeedList) {
+  for (const char* bad : {"", "-1", "1,,2", "a", "3-1", "1-", "1-2-3", "18446744073709551616", "1.5", "1, 2"}) {
+    EXPECT_THROW(ParseSeedList(bad), std::invalid_argument) << bad;
+  }
+  EXPECT_THROW(ParseSeedList("1-20001"), std::invalid_argument);
+  EXPECT_THROW(ParseSeedList("1-5,1-5", 8), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace dpc::cli

@@ -1,5 +1,7 @@
 #include "sweep_command.h"
 
+#include "dpc/cli/command_line.h"
+
 #include <CLI/CLI.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -95,7 +97,8 @@ TEST_F(SweepCommandTest, ParsesEveryOption) {
   EXPECT_EQ(command_->get_name(), "sweep");
   EXPECT_EQ(options_.rates_rad_per_s, (std::vector<double>{1e3, 1e4}));
   EXPECT_EQ(options_.methods, (std::vector<std::string>{"gp", "pinv"}));
-  EXPECT_EQ(options_.seeds, (std::vector<uint64_t>{1, 2, 3}));
+  EXPECT_EQ(options_.seeds, "1,2,3");
+  EXPECT_EQ(cli::ParseSeedList(options_.seeds), (std::vector<uint64_t>{1, 2, 3}));
   EXPECT_EQ(options_.devices, (std::vector<std::string>{"131", "3131"}));
   EXPECT_EQ(options_.jobs, 2);
   EXPECT_TRUE(options_.json);
