@@ -13,7 +13,7 @@ PACKAGES=(
   build-essential cmake pkg-config
   libeigen3-dev libboost-dev libfmt-dev libspdlog-dev libcli11-dev nlohmann-json3-dev
   libprotobuf-dev protobuf-compiler
-  libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev
+  libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libzstd-dev liblz4-dev
   gnuplot-nox time
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   cyclonedds-dev cyclonedds-tools iproute2 procps python3

@@ -14,6 +14,7 @@
 
 #include "dpc/bus/message_conversion.h"
 #include "dpc/config/scenario_config.h"
+#include "dpc/record/mcap.h"
 #include "fuzz_wire.h"
 
 namespace {
@@ -284,6 +285,29 @@ void Requests() {
   Seed("target_request", "set", request, ok);
 }
 
+/// Small recordings in each compression, and one cut short (a recorder killed mid-chunk).
+void McapFiles() {
+  fs::create_directories(root / "read_mcap");
+  for (const record::McapCompression compression :
+       {record::McapCompression::kNone, record::McapCompression::kZstd, record::McapCompression::kLz4}) {
+    const std::string name = *record::McapCompressionName(compression) ? record::McapCompressionName(compression) : "none";
+    const std::string path = (root / "read_mcap" / (name + ".mcap")).string();
+    {
+      record::McapWriter writer(path, {"seed", compression, 256});
+      const uint16_t schema = writer.AddSchema("dpc::msg::StokesSample", "omgidl", "struct S { double x; };");
+      const uint16_t channel = writer.AddChannel(schema, "dpc_stokes_sample", "cdr", {{"k", "v"}});
+      writer.WriteMetadata({"scenario", {{"text", "name: \"seed\""}}});
+      for (uint32_t k = 0; k < 40; ++k) writer.Write({channel, k, 1000 + k, 900 + k, std::string(8 + k % 5, static_cast<char>(k))});
+      writer.Close();
+    }
+    if (compression == record::McapCompression::kZstd) {
+      std::ifstream in(path, std::ios::binary);
+      std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      std::ofstream(root / "read_mcap" / "zstd-cut.mcap", std::ios::binary) << bytes.substr(0, bytes.size() * 2 / 3);
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -301,6 +325,7 @@ int main(int argc, char** argv) {
     Requests();
     Summaries();
     Statuses();
+    McapFiles();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "dpc_fuzz_seeds: %s\n", e.what());
     return 1;
