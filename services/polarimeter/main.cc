@@ -13,6 +13,7 @@
 #include "dds_bench_link.h"
 #include "dpc/bus/bus_participant.h"
 #include "dpc/cli/run_report.h"
+#include "dpc/sim/trace_header.h"
 #include "dpc/sim/trace_writer.h"
 #include "service.h"
 
@@ -80,9 +81,11 @@ class PolarimeterService final : public Service {
     if (!options.trace_path.empty()) {
       std::vector<std::string> names;
       for (const auto& c : bench_.chain().controls()) names.push_back(c.name);
+      // dpc sim's header (dpc plot redraws the trace), and who wrote it.
       trace_ = std::make_unique<TraceWriter>(
           options.trace_path, names,
-          std::vector<std::string>{"dpc-polarimeter " + std::string(options.bench.lockstep ? "lockstep" : "real time")});
+          TraceHeaderLines(bench_.scenario(), bench_.chain(), bench_.target(), 1,
+                           "dpc-polarimeter " + std::string(options.bench.lockstep ? "lockstep" : "real time")));
     }
     spdlog::info("{}, {} controls, profiles {}, domain {}",
                  options.bench.lockstep ? "lockstep" : fmt::format("real time at {} Hz", options.bench.rate_hz),

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <csignal>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -151,6 +152,11 @@ TEST_F(BenchLoopTest, LockstepAcrossProcessesReproducesDpcSim) {
   const nlohmann::json simulated = LastJsonLine(sim.Log());
   EXPECT_NEAR(bench["error_deg"]["mean"].get<double>(), simulated["error_deg"]["mean"].get<double>(), 1e-9);
   EXPECT_EQ(bench["bench"]["published"].get<int>(), 5000);
+
+  // The polarimeter's trace carries dpc sim's header: dpc plot draws it as it draws a sim trace.
+  Process plot({DPC_BINARY, "plot", bench_trace, "-o", dir_ + "/lockstep.png"}, dir_ + "/plot.log");
+  ASSERT_EQ(plot.Wait(60s), 0) << plot.Log();
+  EXPECT_GT(std::filesystem::file_size(dir_ + "/lockstep.png"), 10000u);
 }
 
 }  // namespace

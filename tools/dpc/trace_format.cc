@@ -6,48 +6,18 @@
 #include <stdexcept>
 
 #include "dpc/control/control_law_factory.h"
+#include "dpc/sim/trace_header.h"
 #include "trace_envelope.h"
 
 namespace dpc::tools {
-namespace {
 
-constexpr const char* kMagic = "dpc-trace";
-
-std::string Title(const ClosedLoopSimulator& simulator) {
-  const ScenarioConfig& s = simulator.scenario();
-  // The device in the paper's notation (M = M_m…M_1) and in the order the light meets it.
-  return fmt::format("{}: M = {} (light: {}), {}, {} loop", s.name, simulator.chain().PaperNotation(),
-                     simulator.chain().Describe(),
-                     MethodName(s.controller.method),
-                     s.controller.loop == LoopMode::kModel ? "model" : "measured");
-}
-
-}  // namespace
-
-std::vector<std::string> TraceHeaderComments(const ClosedLoopSimulator& simulator,
-                                             int64_t trace_every) {
-  const ScenarioConfig& s = simulator.scenario();
-  std::vector<std::string> lines{kMagic, "title=" + Title(simulator),
-                                 fmt::format("activation_s={:.17g}", s.controller.activation_s)};
-  if (simulator.target().is_point()) {
-    const StokesVector& p = simulator.target().point();
-    lines.push_back(fmt::format("target_point={:.17g},{:.17g},{:.17g}", p.x(), p.y(), p.z()));
-  }
-  if (simulator.chain().has_ranges()) {
-    std::string ranges;
-    const auto& lo = simulator.chain().range_min();
-    const auto& hi = simulator.chain().range_max();
-    for (size_t i = 0; i < lo.size(); ++i) ranges += fmt::format("{}{:.17g}:{:.17g}", i ? "," : "", lo[i], hi[i]);
-    lines.push_back("control_ranges=" + ranges);
-  }
-  lines.push_back(fmt::format("sample_rate_hz={:.17g}", s.simulation.sample_rate_hz));
-  lines.push_back(fmt::format("trace_every={}", trace_every));
-  return lines;
+std::vector<std::string> TraceHeaderComments(const ClosedLoopSimulator& simulator, int64_t trace_every) {
+  return TraceHeaderLines(simulator.scenario(), simulator.chain(), simulator.target(), trace_every);
 }
 
 FigureOptions FigureOptionsFor(const ClosedLoopSimulator& simulator) {
   FigureOptions options;
-  options.title = Title(simulator);
+  options.title = TraceTitle(simulator.scenario(), simulator.chain());
   options.activation_s = simulator.scenario().controller.activation_s;
   if (simulator.target().is_point()) options.target_point = simulator.target().point();
   if (simulator.chain().has_ranges()) {
@@ -63,7 +33,7 @@ std::map<std::string, std::string> ReadTraceMetadata(const std::string& path) {
   std::map<std::string, std::string> metadata;
   bool magic = false;
   for (const std::string& line : header.comment_lines) {
-    if (line == kMagic) {
+    if (line == kTraceMagic) {
       magic = true;
       continue;
     }
@@ -73,7 +43,7 @@ std::map<std::string, std::string> ReadTraceMetadata(const std::string& path) {
   if (!magic) {
     throw std::runtime_error(
         fmt::format("{} is not a dpc trace (no '# {}' line); write one with dpc sim --trace", path,
-                    kMagic));
+                    kTraceMagic));
   }
   return metadata;
 }
