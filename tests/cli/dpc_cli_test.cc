@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -234,6 +235,41 @@ TEST_F(DpcCliTest, SeedsRunOncePerSeedAndReportTheSpreadOverThem) {
   const Result bad = Run("sim --seeds 3-1");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("--seeds"), std::string::npos) << bad.err;
+}
+
+TEST_F(DpcCliTest, InfoSaysWhatARecordingHoldsAndWhetherItEndedProperly) {
+  ASSERT_EQ(std::system((std::string(DPC_MCAP_SAMPLE_BINARY) + " " + dir_.string()).c_str()), 0);
+  Result r = Run("info " + (dir_ / "sample-zstd.mcap").string() + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["complete"]);
+  EXPECT_EQ(j["messages"], 2000);
+  EXPECT_NEAR(j["duration_s"].get<double>(), 0.1999, 1e-9);
+  EXPECT_EQ(j["metadata"]["recorder"]["host"], "here");
+  ASSERT_EQ(j["channels"].size(), 2u);
+  EXPECT_EQ(j["channels"][0]["topic"], "dpc_stokes_sample");
+  EXPECT_EQ(j["channels"][0]["schema"], "dpc::msg::StokesSample");
+  EXPECT_EQ(j["channels"][0]["messages"], 1000);
+  EXPECT_NEAR(j["channels"][0]["rate_hz"].get<double>(), 5000.0, 1e-6);
+  EXPECT_NEAR(j["channels"][1]["largest_gap_s"].get<double>(), 2e-4, 1e-12);
+  // Cut short (a recorder killed): what is before the cut is read, and the exit code says so.
+  {
+    std::ifstream in(dir_ / "sample-lz4.mcap", std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream(dir_ / "cut.mcap", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  }
+  r = Run("info " + (dir_ / "cut.mcap").string() + " --json");
+  EXPECT_EQ(r.exit_code, 1);
+  j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["complete"]);
+  EXPECT_NE(j["problem"].get<std::string>().find("cut short"), std::string::npos) << j["problem"];
+  EXPECT_GT(j["messages"].get<int>(), 500);
+  EXPECT_LT(j["messages"].get<int>(), 2000);
+  // Not a recording at all.
+  std::ofstream(dir_ / "trace.csv") << "t_s,s_in_1\n0,1\n";
+  r = Run("info " + (dir_ / "trace.csv").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("not an MCAP file"), std::string::npos) << r.err;
 }
 
 TEST_F(DpcCliTest, InterruptStopsALongRunAndKeepsWhatWasRecorded) {

@@ -3,6 +3,7 @@
 //   dpc sim   [SCENARIO] [flags]   one closed-loop simulation (summary, JSON, trace, figure)
 //   dpc sweep [SCENARIO] [flags]   a grid of simulations over rates, methods and seeds, on all cores
 //   dpc plot  TRACE -o PNG         the paper-style figure from a trace
+//   dpc info  FILE.mcap            what a recording holds (topics, counts, duration, rates, gaps)
 //   dpc topic list|echo|hz         the bench's DDS topics (discovery, samples, rates)
 //   dpc target --point S1 S2 S3    change a running bench's target (or --set-normal, --linear)
 //   dpc monitor                    a running bench's live status on one line
@@ -14,6 +15,7 @@
 #include "dpc/cli/command_line.h"
 #include "dpc/cli/exit_code.h"
 #include "dashboard_command.h"
+#include "info_command.h"
 #include "monitor_command.h"
 #include "plot_command.h"
 #include "sim_command.h"
@@ -34,6 +36,8 @@ int main(int argc, char** argv) {
   CLI::App* sweep = AddSweepCommand(app, &sweep_options);
   PlotOptions plot_options;
   CLI::App* plot = AddPlotCommand(app, &plot_options);
+  InfoOptions info_options;
+  CLI::App* info = AddInfoCommand(app, &info_options);
   TopicOptions topic_options;
   CLI::App* topic = AddTopicCommand(app, &topic_options);
   TargetOptions target_options;
@@ -58,6 +62,7 @@ int main(int argc, char** argv) {
   if (*sim) return ToInt(RunSimCommand(sim_options));
   if (*sweep) return ToInt(RunSweepCommand(sweep_options));
   if (*plot) return ToInt(RunPlotCommand(plot_options));
+  if (*info) return ToInt(RunInfoCommand(info_options));
   if (*topic) return ToInt(RunTopicCommand(topic_options));
   if (*target) return ToInt(RunTargetCommand(target_options));
   if (*monitor) return ToInt(RunMonitorCommand(monitor_options));
