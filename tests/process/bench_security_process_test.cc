@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +17,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include "support/bench_fixture.h"
@@ -23,6 +26,7 @@ namespace dpc {
 namespace {
 
 using dpc::testing::Eventually;
+using dpc::testing::Process;
 using namespace std::chrono_literals;
 namespace fs = std::filesystem;
 
@@ -81,9 +85,38 @@ class BenchSecurityTest : public dpc::testing::BenchFixture {
     ASSERT_TRUE(g_setup_error.empty()) << g_setup_error;
     common_args_ = {"--security-dir", g_pki};
     StartObserver(48, {g_pki, "observer"});
-    StartDriver();
-    StartController("main", 10);
-    StartPolarimeter({"--rate-hz", "1000"});
+    Process& driver = StartDriver();
+    Process* controller = &StartController("main", 10);
+    Process* polarimeter = &StartPolarimeter({"--rate-hz", "1000"});
+    if (!Eventually([&] { return AppliedBy("main") > 200; }, 15s)) {
+      // Fast DDS 2.9: the security handshake of two participants that start at the same instant
+      // can stall for good — both discovered each other, neither ever reports the other
+      // authenticated (seen about once in twenty starts of this fixture). An operator's remedy
+      // is a restart of one of them; the fixture does that once for the service whose
+      // handshake with the driver did not finish, and says so. A second stall fails the test.
+      const auto authenticated = [&](const std::string& name) {
+        const std::string log = driver.Log();
+        for (size_t at = log.find("participant authenticated:"); at != std::string::npos;
+             at = log.find("participant authenticated:", at + 1)) {
+          if (log.substr(at, log.find('\n', at) - at).find("(" + name + ")") != std::string::npos) return true;
+        }
+        return false;
+      };
+      for (auto [process, name, restart] :
+           {std::tuple<Process**, std::string, std::function<Process&()>>{
+                &polarimeter, "dpc-polarimeter/bench1",
+                [&]() -> Process& { return StartPolarimeter({"--rate-hz", "1000"}, "polarimeter_restarted"); }},
+            {&controller, "dpc-controller/main", [&]() -> Process& {
+               return Start(DPC_CONTROLLER_BINARY, {"--id", "main", "--priority", "10"}, "controller_main_restarted");
+             }}}) {
+        if (authenticated(name)) continue;
+        std::fprintf(stderr, "note: the driver's security handshake with %s did not finish in 15 s (a Fast DDS 2.9 "
+                             "stall); restarting it once\n", name.c_str());
+        (*process)->Signal(SIGTERM);
+        (*process)->Wait(10s);
+        *process = &restart();
+      }
+    }
     ASSERT_TRUE(Eventually([&] { return AppliedBy("main") > 200; }, 30s)) << Logs();
   }
 
