@@ -10,6 +10,8 @@
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fmt/format.h>
 
+#include "dpc/bus/message_conversion.h"
+
 namespace dpc::bus {
 namespace fdds = eprosima::fastdds::dds;
 
@@ -170,8 +172,7 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
 
 std::string PrintableName(const std::string& name) {
   constexpr size_t kMaxBytes = 64;
-  std::string out;
-  for (unsigned char c : name.substr(0, kMaxBytes)) out += (c < 0x20 || c == 0x7f) ? '?' : static_cast<char>(c);
+  std::string out = PrintableText(name.substr(0, kMaxBytes));
   if (name.size() > kMaxBytes) out += "…";
   return out;
 }

@@ -421,6 +421,14 @@ std::string ReadTarget(const msg::Target& message, BenchTarget* out) {
 
 TargetConfig TargetFromRequest(const msg::TargetRequest& request) { return TargetConfigOf(request); }
 
+std::string PrintableText(std::string text) {
+  for (char& c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte < 0x20 || byte == 0x7f) c = '?';
+  }
+  return text;
+}
+
 msg::ControllerStatus StatusMessage(const ControllerStatusReport& status, const std::string& bench_id) {
   msg::ControllerStatus out;
   out.bench_id(bench_id);
@@ -461,19 +469,11 @@ std::string ReadStatus(const msg::ControllerStatus& m, ControllerStatusReport* o
     return fmt::format("nullspace_active_fraction = {} (at most 1)", m.nullspace_active_fraction());
   }
   if (m.controller_id().size() == 0) return "no controller_id";
-  // Text for people: a control character (a terminal escape, a newline) becomes '?'.
-  const auto printable = [](std::string text) {
-    for (char& c : text) {
-      const auto byte = static_cast<unsigned char>(c);
-      if (byte < 0x20 || byte == 0x7f) c = '?';
-    }
-    return text;
-  };
-  out->controller_id = printable(m.controller_id().to_string());
+  out->controller_id = PrintableText(m.controller_id().to_string());
   out->priority = m.priority();
-  out->law = printable(m.law().to_string());
+  out->law = PrintableText(m.law().to_string());
   out->obeyed = m.obeyed();
-  out->condition = printable(m.condition().to_string());
+  out->condition = PrintableText(m.condition().to_string());
   out->answers_sample = m.answers_sample();
   out->error_deg = m.error_deg();
   out->sigma_max = m.sigma_max();
@@ -485,7 +485,7 @@ std::string ReadStatus(const msg::ControllerStatus& m, ControllerStatusReport* o
   out->failed_updates = m.failed_updates();
   out->rejected_samples = m.rejected_samples();
   out->missed_deadlines = m.missed_deadlines();
-  out->last_rejection = printable(m.last_rejection().to_string());
+  out->last_rejection = PrintableText(m.last_rejection().to_string());
   out->publish_time_ns = m.publish_time_ns();
   return {};
 }

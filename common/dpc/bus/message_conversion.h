@@ -62,6 +62,10 @@ std::string ReadTarget(const msg::Target& message, BenchTarget* out);
 /// std::invalid_argument for an unknown kind.
 TargetConfig TargetFromRequest(const msg::TargetRequest& request);
 
+/// `text` for people: each control character (a terminal escape, a newline that would forge a
+/// log line) becomes '?'. PrintableName also bounds the length.
+std::string PrintableText(std::string text);
+
 msg::ControllerStatus StatusMessage(const ControllerStatusReport& status, const std::string& bench_id);
 /// Reads a controller's status into `out`: empty if it is usable (a controller id; every figure
 /// finite and not negative, the error at most 180°, the null-space fraction at most 1); else
