@@ -318,7 +318,7 @@ void McapWriter::Emit(const std::string& bytes) {
   if (std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size()) {
     throw std::runtime_error(fmt::format("cannot write {}: {}", path_, std::strerror(errno)));
   }
-  data_crc_ = Crc32(data_crc_, bytes);
+  crc_ = Crc32(crc_, bytes);
   offset_ += bytes.size();
 }
 
@@ -374,8 +374,7 @@ void McapWriter::WriteMetadata(const McapMetadata& metadata) {
   PutString(&content, metadata.name);
   PutStringMap(&content, metadata.values);
   const std::string record = Record(kMetadata, content);
-  metadata_.emplace_back(offset_, metadata);
-  metadata_lengths_.push_back(record.size());
+  metadata_indexes_.push_back({offset_, record.size(), metadata.name});
   Emit(record);
 }
 
@@ -430,12 +429,12 @@ void McapWriter::Close() {
   closed_ = true;
   WriteChunk();
   std::string data_end;
-  PutLe<uint32_t>(&data_end, data_crc_);
+  PutLe<uint32_t>(&data_end, crc_);
   Emit(Record(kDataEnd, data_end));
 
   // The summary: each group's records, then one SummaryOffset per group.
   const uint64_t summary_start = offset_;
-  data_crc_ = 0;  // from here on: the summary's CRC
+  crc_ = 0;  // from here on: the summary's CRC
   std::vector<std::tuple<uint8_t, uint64_t, uint64_t>> groups;
   const auto group = [&](uint8_t opcode, const std::vector<std::string>& records) {
     if (records.empty()) return;
@@ -454,7 +453,7 @@ void McapWriter::Close() {
   PutLe<uint16_t>(&statistics, static_cast<uint16_t>(schemas_.size()));
   PutLe<uint32_t>(&statistics, static_cast<uint32_t>(channels_.size()));
   PutLe<uint32_t>(&statistics, 0);  // attachments
-  PutLe<uint32_t>(&statistics, static_cast<uint32_t>(metadata_.size()));
+  PutLe<uint32_t>(&statistics, static_cast<uint32_t>(metadata_indexes_.size()));
   PutLe<uint32_t>(&statistics, static_cast<uint32_t>(chunk_count_));
   PutLe<uint64_t>(&statistics, message_count_ ? first_time_ : 0);
   PutLe<uint64_t>(&statistics, message_count_ ? last_time_ : 0);
@@ -466,11 +465,11 @@ void McapWriter::Close() {
   PutString(&statistics, counts);
   group(kStatistics, {Record(kStatistics, statistics)});
   records.clear();
-  for (size_t i = 0; i < metadata_.size(); ++i) {
+  for (const MetadataIndex& index : metadata_indexes_) {
     std::string c;
-    PutLe<uint64_t>(&c, metadata_[i].first);
-    PutLe<uint64_t>(&c, metadata_lengths_[i]);
-    PutString(&c, metadata_[i].second.name);
+    PutLe<uint64_t>(&c, index.offset);
+    PutLe<uint64_t>(&c, index.length);
+    PutString(&c, index.name);
     records.push_back(Record(kMetadataIndex, c));
   }
   group(kMetadataIndex, records);
@@ -510,7 +509,7 @@ void McapWriter::Close() {
   PutLe<uint64_t>(&footer_head, summary_offset_start);
   Emit(footer_head);
   std::string footer_tail;
-  PutLe<uint32_t>(&footer_tail, data_crc_);
+  PutLe<uint32_t>(&footer_tail, crc_);
   footer_tail.append(kMagic, kMagicSize);
   Emit(footer_tail);
   if (std::fflush(file_) != 0) throw std::runtime_error(fmt::format("cannot write {}: {}", path_, std::strerror(errno)));

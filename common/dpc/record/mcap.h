@@ -120,12 +120,15 @@ class McapWriter {
   McapWriterOptions options_;
   std::FILE* file_ = nullptr;
   uint64_t offset_ = 0;
-  uint32_t data_crc_ = 0;  ///< running CRC32 of everything written so far (the data section)
+  uint32_t crc_ = 0;  ///< running CRC32 of what was written: the data section, then the summary
   bool closed_ = false;
   std::vector<McapSchema> schemas_;
   std::vector<McapChannel> channels_;
-  std::vector<std::pair<uint64_t, McapMetadata>> metadata_;  ///< offset, record (for the index)
-  std::vector<uint64_t> metadata_lengths_;
+  struct MetadataIndex {
+    uint64_t offset = 0, length = 0;
+    std::string name;
+  };
+  std::vector<MetadataIndex> metadata_indexes_;
   // The chunk being filled.
   std::string chunk_records_;
   uint64_t chunk_start_time_ = 0, chunk_end_time_ = 0;
