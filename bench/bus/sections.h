@@ -25,6 +25,9 @@ void RunTrackingSection(const BusBenchmarkHarness& harness);
 /// AES-GCM-GMAC) side by side: loop latency, CPU per sample, sustained rate
 /// (security_section.cc).
 void RunSecuritySection(const BusBenchmarkHarness& harness);
+/// record: `dpc record` of a real-time bench at 2 and 10 kHz: the recorder's CPU, samples kept
+/// and missing (record_section.cc).
+void RunRecordSection(const BusBenchmarkHarness& harness);
 /// memory: RSS of each service at the start and the end of a long 10 kHz run
 /// (memory_section.cc).
 void RunMemorySection(const BusBenchmarkHarness& harness);

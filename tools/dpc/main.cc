@@ -4,6 +4,8 @@
 //   dpc sweep [SCENARIO] [flags]   a grid of simulations over rates, methods and seeds, on all cores
 //   dpc plot  TRACE -o PNG         the paper-style figure from a trace
 //   dpc info  FILE.mcap            what a recording holds (topics, counts, duration, rates, gaps)
+//   dpc record -o FILE.mcap        a bench's topics into an MCAP file
+//   dpc replay FILE.mcap           a recording re-published with its timing
 //   dpc topic list|echo|hz         the bench's DDS topics (discovery, samples, rates)
 //   dpc target --point S1 S2 S3    change a running bench's target (or --set-normal, --linear)
 //   dpc monitor                    a running bench's live status on one line
@@ -18,6 +20,8 @@
 #include "info_command.h"
 #include "monitor_command.h"
 #include "plot_command.h"
+#include "record_command.h"
+#include "replay_command.h"
 #include "sim_command.h"
 #include "sweep_command.h"
 #include "target_command.h"
@@ -38,6 +42,10 @@ int main(int argc, char** argv) {
   CLI::App* plot = AddPlotCommand(app, &plot_options);
   InfoOptions info_options;
   CLI::App* info = AddInfoCommand(app, &info_options);
+  RecordOptions record_options;
+  CLI::App* record = AddRecordCommand(app, &record_options);
+  ReplayOptions replay_options;
+  CLI::App* replay = AddReplayCommand(app, &replay_options);
   TopicOptions topic_options;
   CLI::App* topic = AddTopicCommand(app, &topic_options);
   TargetOptions target_options;
@@ -63,6 +71,8 @@ int main(int argc, char** argv) {
   if (*sweep) return ToInt(RunSweepCommand(sweep_options));
   if (*plot) return ToInt(RunPlotCommand(plot_options));
   if (*info) return ToInt(RunInfoCommand(info_options));
+  if (*record) return ToInt(RunRecordCommand(record_options));
+  if (*replay) return ToInt(RunReplayCommand(replay_options));
   if (*topic) return ToInt(RunTopicCommand(topic_options));
   if (*target) return ToInt(RunTargetCommand(target_options));
   if (*monitor) return ToInt(RunMonitorCommand(monitor_options));

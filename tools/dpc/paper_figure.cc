@@ -28,6 +28,8 @@ constexpr const char* kErrorColour = "#B2182B";
 constexpr const char* kRangeColour = "#8C6D1F";
 constexpr const char* kTargetColour = "#222222";
 constexpr const char* kActivationColour = "#666666";
+constexpr const char* kShadeColour = "#FBE3C9";
+constexpr const char* kEventColour = "#7B3294";
 constexpr std::array<const char*, 7> kSeriesColours = {"#0072B2", "#D55E00", "#009E73",
                                                       "#CC79A7", "#E69F00", "#56B4E9",
                                                       "#000000"};
@@ -196,6 +198,14 @@ void ValidateOptions(const FigureOptions& options) {
   if (options.activation_s && !std::isfinite(*options.activation_s)) {
     throw std::invalid_argument("figure activation_s must be finite");
   }
+  for (const auto& [from, to] : options.shaded_intervals) {
+    if (!std::isfinite(from) || !std::isfinite(to) || !(from <= to)) {
+      throw std::invalid_argument(fmt::format("figure shaded interval [{}, {}] must be finite with from <= to", from, to));
+    }
+  }
+  for (const FigureEvent& event : options.events) {
+    if (!std::isfinite(event.t_s)) throw std::invalid_argument("figure event time must be finite");
+  }
   for (const auto& [lo, hi] : options.control_ranges) {
     if (std::isnan(lo) || std::isnan(hi) || !(lo <= hi)) {
       throw std::invalid_argument(fmt::format("figure control range [{}, {}] must have min <= max", lo, hi));
@@ -296,6 +306,29 @@ void WritePaperFigure(const std::string& trace_csv, const std::string& png_path,
                    *options.activation_s * options.time_scale,
                    *options.activation_s * options.time_scale, kActivationColour);
   }
+  // Shaded intervals and events, in every panel, within the time axis only.
+  size_t shaded = 0;
+  for (const auto& [from, to] : options.shaded_intervals) {
+    const double a = std::max(from, envelope.t_min_s), b = std::min(to, envelope.t_max_s);
+    if (!(a <= b) || shaded >= kFigureMaxMarks) continue;
+    ++shaded;
+    fmt::format_to(out,
+                   "set object {} rect from first {:.15g}, graph 0 to first {:.15g}, graph 1 behind "
+                   "fc rgb '{}' fs solid 1.0 noborder\n",
+                   shaded, a * options.time_scale, std::max(b * options.time_scale, a * options.time_scale), kShadeColour);
+  }
+  std::vector<const FigureEvent*> events;
+  for (const FigureEvent& event : options.events) {
+    if (event.t_s >= envelope.t_min_s && event.t_s <= envelope.t_max_s && events.size() < kFigureMaxMarks) {
+      events.push_back(&event);
+    }
+  }
+  for (size_t e = 0; e < events.size(); ++e) {
+    fmt::format_to(out,
+                   "set arrow {} from first {:.15g}, graph 0 to first {:.15g}, graph 1 nohead "
+                   "dt (1,2) lc rgb '{}' lw 1.2 front\n",
+                   100 + e, events[e]->t_s * options.time_scale, events[e]->t_s * options.time_scale, kEventColour);
+  }
   if (options.title.empty()) {
     fmt::format_to(out, "set multiplot\n");
   } else {
@@ -338,6 +371,12 @@ void WritePaperFigure(const std::string& trace_csv, const std::string& png_path,
                      kTargetColour);
     }
   }
+  if (events.size() <= kFigureMaxEventLabels) {
+    for (size_t e = 0; e < events.size(); ++e) {
+      fmt::format_to(out, "set label {} {} at first {:.15g}, graph 1.04 center noenhanced font ',8' tc rgb '{}'\n",
+                     100 + e, GnuplotQuote(events[e]->label), events[e]->t_s * options.time_scale, kEventColour);
+    }
+  }
   fmt::format_to(out, "plot ");
   for (int k = 0; k < 3; ++k) {
     fmt::format_to(out, "{}$s_out_{} using 1:2 with lines lc rgb '{}' title 's_{}'",
@@ -352,8 +391,19 @@ void WritePaperFigure(const std::string& trace_csv, const std::string& png_path,
     fmt::format_to(out, ", \\\n     NaN with lines dt (2,3) lw 1.2 lc rgb '{}' title 'DPC on'",
                    kActivationColour);
   }
+  if (shaded > 0) {
+    fmt::format_to(out, ", \\\n     NaN with lines lw 8 lc rgb '{}' title {}", kShadeColour,
+                   GnuplotQuote(options.shaded_label));
+  }
+  if (!events.empty()) {
+    fmt::format_to(out, ", \\\n     NaN with lines dt (1,2) lw 1.2 lc rgb '{}' title {}", kEventColour,
+                   GnuplotQuote(options.events_label));
+  }
   fmt::format_to(out, "\nunset key\nunset arrow 1\nunset arrow 2\nunset arrow 3\n"
                       "unset mytics\n");
+  for (size_t e = 0; e < events.size() && e < kFigureMaxEventLabels; ++e) {
+    fmt::format_to(out, "unset label {}\n", 100 + e);
+  }
 
   // (b): the error, log axis, with the extinction's scale on the right.
   set_panel(1);

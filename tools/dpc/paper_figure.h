@@ -40,6 +40,18 @@
 
 namespace dpc {
 
+/// A moment marked in every panel by a dotted vertical line, its label above panel (a) (e.g. a
+/// controller switch).
+struct FigureEvent {
+  double t_s = 0.0;
+  std::string label;
+};
+
+/// At most this many events and shaded intervals are drawn (the first ones); at most
+/// kFigureMaxEventLabels events are labelled (more would overlap).
+inline constexpr size_t kFigureMaxMarks = 200;
+inline constexpr size_t kFigureMaxEventLabels = 12;
+
 struct FigureOptions {
   /// Figure title above panel (a), drawn verbatim; empty: no title (and a thinner top band).
   std::string title;
@@ -52,6 +64,13 @@ struct FigureOptions {
   /// Each control's range {min, max}, in the trace's order (one per control, or none at all);
   /// a bound that is not finite is not drawn.
   std::vector<std::pair<double, double>> control_ranges;
+  /// Intervals [from_s, to_s] shaded in every panel (e.g. the driver holding), named
+  /// `shaded_label` in panel (a)'s key; clipped to the trace's time range.
+  std::vector<std::pair<double, double>> shaded_intervals;
+  std::string shaded_label = "driver holding";
+  /// Events (e.g. controller switches), named `events_label` in panel (a)'s key.
+  std::vector<FigureEvent> events;
+  std::string events_label = "controller switch";
   /// PNG width; at least kFigureMinWidthPx.
   int width_px = 1000;
   /// Height of each panel; at least kFigureMinPanelHeightPx.

@@ -321,11 +321,13 @@ fdds::DataWriter* BusParticipant::CreateWriter(fdds::Publisher* publisher, fdds:
 }
 
 fdds::DataReader* BusParticipant::CreateReader(fdds::Subscriber* subscriber, fdds::Topic* topic,
-                                               const std::string& profile, fdds::DataReaderListener* listener) {
+                                               const std::string& profile, fdds::DataReaderListener* listener,
+                                               const std::function<void(fdds::DataReaderQos&)>& adjust) {
   fdds::DataReaderQos qos;
   if (subscriber->get_datareader_qos_from_profile(profile, qos) != ReturnCode_t::RETCODE_OK) {
     throw BusError(fmt::format("{}: no data_reader profile \"{}\"", profiles_file_, profile));
   }
+  if (adjust) adjust(qos);
   fdds::DataReader* reader = subscriber->create_datareader(topic, qos, listener);
   if (reader == nullptr) {
     throw BusError(fmt::format("could not create a reader on {} in partition {} with profile {}{}", topic->get_name(),

@@ -14,8 +14,10 @@
 // the governance says with AES-GCM-GMAC. Without credentials, or with an identity that may not
 // publish or read a topic in a partition, nothing is matched.
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
+#include <cstring>
 #include <functional>
 #include <map>
 #include <memory>
@@ -183,6 +185,146 @@ class Reader : public eprosima::fastdds::dds::DataReaderListener {
   eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
 };
 
+/// A sample as it arrived on the wire: its serialized payload, CDR encapsulation header
+/// included, untouched (what a recorder keeps), with the writer's source timestamp and the
+/// reception time (CLOCK_REALTIME ns; 0 for a time before 1970).
+struct RawSample {
+  std::string bytes;
+  uint64_t source_time_ns = 0;
+  uint64_t reception_time_ns = 0;
+};
+
+/// Decodes a raw payload (RawSample::bytes) with `Message`'s real type support; false if it
+/// does not decode.
+template <typename Message>
+bool DecodeRaw(const std::string& bytes, Message* message) {
+  typename TopicTraits<Message>::PubSubType type;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<uint32_t>(bytes.size()));
+  std::memcpy(payload.data, bytes.data(), bytes.size());
+  payload.length = static_cast<uint32_t>(bytes.size());
+  return type.deserialize(&payload, message);
+}
+
+/// `message` serialized with its real type support, CDR encapsulation header included (what a
+/// writer of it sends and RawSample::bytes holds).
+template <typename Message>
+std::string EncodeRaw(const Message& message) {
+  typename TopicTraits<Message>::PubSubType type;
+  Message copy = message;  // the type support takes a non-const pointer
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(type.getSerializedSizeProvider(&copy)());
+  if (!type.serialize(&copy, &payload)) return {};
+  return std::string(reinterpret_cast<const char*>(payload.data), payload.length);
+}
+
+/// A pass-through type support registered under `Message`'s type name: a reader of it matches
+/// the bench's writers of `Message` and hands over each payload's bytes as they arrived. Its
+/// key (keyed topics) is the real type's, from the bytes. A participant uses either this or the
+/// typed support of a topic, never both (one type name, one registration).
+template <typename Message>
+class RawPubSubType : public eprosima::fastdds::dds::TopicDataType {
+ public:
+  RawPubSubType() {
+    setName(real_.getName());
+    m_typeSize = real_.m_typeSize;
+    m_isGetKeyDefined = real_.m_isGetKeyDefined;
+  }
+  bool serialize(void* data, eprosima::fastrtps::rtps::SerializedPayload_t* payload) override {
+    const std::string& bytes = static_cast<RawSample*>(data)->bytes;
+    if (bytes.size() > payload->max_size) return false;
+    std::memcpy(payload->data, bytes.data(), bytes.size());
+    payload->length = static_cast<uint32_t>(bytes.size());
+    return true;
+  }
+  bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t* payload, void* data) override {
+    static_cast<RawSample*>(data)->bytes.assign(reinterpret_cast<const char*>(payload->data), payload->length);
+    return true;
+  }
+  std::function<uint32_t()> getSerializedSizeProvider(void* data) override {
+    return [data] { return static_cast<uint32_t>(static_cast<RawSample*>(data)->bytes.size()); };
+  }
+  void* createData() override { return new RawSample(); }
+  void deleteData(void* data) override { delete static_cast<RawSample*>(data); }
+  bool getKey(void* data, eprosima::fastrtps::rtps::InstanceHandle_t* handle, bool force_md5) override {
+    if (!m_isGetKeyDefined) return false;
+    Message message;
+    return DecodeRaw(static_cast<RawSample*>(data)->bytes, &message) && real_.getKey(&message, handle, force_md5);
+  }
+
+ private:
+  typename TopicTraits<Message>::PubSubType real_;
+};
+
+/// A reader of one topic's raw payloads (RawPubSubType) that its owner drains with TakeAll()
+/// (a recorder's writing loop), with no work per sample on Fast DDS's receive thread besides
+/// storing it: no listener call, no deadline timer. Its history keeps kDepth samples per
+/// instance between two takes. No bench filter: the partition is the bench's.
+class RawReader : public eprosima::fastdds::dds::DataReaderListener {
+ public:
+  static constexpr int32_t kDepth = 8192;
+
+  RawReader() = default;
+  ~RawReader() override {
+    if (reader_ != nullptr) {
+      reader_->set_listener(nullptr);
+      subscriber_->delete_datareader(reader_);
+    }
+  }
+  RawReader(const RawReader&) = delete;
+  RawReader& operator=(const RawReader&) = delete;
+
+  /// A topic's reader QoS made a recorder's: no deadline (nothing to watch, no timer to re-arm
+  /// per sample), KEEP_LAST kDepth per instance, the pool grown on demand.
+  static void Qos(eprosima::fastdds::dds::DataReaderQos& qos) {
+    qos.deadline().period = eprosima::fastrtps::c_TimeInfinite;
+    qos.history().kind = eprosima::fastdds::dds::KEEP_LAST_HISTORY_QOS;
+    qos.history().depth = kDepth;
+    qos.resource_limits().max_samples_per_instance = kDepth;
+    qos.resource_limits().max_samples = std::max(qos.resource_limits().max_instances, 1) * kDepth;
+    qos.resource_limits().allocated_samples = 64;
+  }
+
+  void Attach(eprosima::fastdds::dds::DataReader* reader, eprosima::fastdds::dds::Subscriber* subscriber) {
+    reader_ = reader;
+    subscriber_ = subscriber;
+  }
+  /// Appends every sample waiting, oldest first (per instance), to `out`; returns how many.
+  size_t TakeAll(std::vector<RawSample>* out) {
+    size_t taken = 0;
+    eprosima::fastdds::dds::SampleInfo info;
+    while (reader_->take_next_sample(&sample_, &info) == ReturnCode_t::RETCODE_OK) {
+      if (!info.valid_data) continue;
+      sample_.source_time_ns = Ns(info.source_timestamp);
+      sample_.reception_time_ns = Ns(info.reception_timestamp);
+      out->push_back(std::move(sample_));
+      sample_ = RawSample();
+      ++taken;
+    }
+    counters_.samples.fetch_add(taken, std::memory_order_relaxed);
+    return taken;
+  }
+  /// Samples Fast DDS reports lost on this reader (SampleLostStatus: sent by a matched writer,
+  /// never received, e.g. dropped on the way).
+  uint64_t lost() const {
+    eprosima::fastdds::dds::SampleLostStatus status;
+    reader_->get_sample_lost_status(status);
+    return static_cast<uint64_t>(status.total_count);
+  }
+  void on_subscription_matched(eprosima::fastdds::dds::DataReader*,
+                               const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
+    counters_.matched_writers.store(status.current_count, std::memory_order_relaxed);
+  }
+  const ReaderCounters& counters() const { return counters_; }
+
+ private:
+  static uint64_t Ns(const eprosima::fastrtps::rtps::Time_t& t) {
+    return t.seconds() < 0 ? 0 : static_cast<uint64_t>(t.seconds()) * 1'000'000'000ull + t.nanosec();
+  }
+  RawSample sample_;  ///< taken into
+  ReaderCounters counters_;
+  eprosima::fastdds::dds::DataReader* reader_ = nullptr;
+  eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
+};
+
 /// A participant's GUID prefix as a SourceId (what SourceBinding judges and SourceName prints).
 inline SourceId SourceOf(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix) {
   SourceId id{};
@@ -232,6 +374,32 @@ class BusParticipant {
     return reader;
   }
 
+  /// A reader of `Message`'s topic in the bench's partition (every controller's, for commands)
+  /// that keeps each sample's payload as it arrived until RawReader::TakeAll (a recorder): the
+  /// topic's reader profile, without its deadline, with a history of RawReader::kDepth.
+  template <typename Message>
+  std::unique_ptr<RawReader> MakeRawReader(const std::string& bench_id) {
+    using Traits = TopicTraits<Message>;
+    auto* topic = TopicFor(std::string(Traits::kTopic), eprosima::fastdds::dds::TypeSupport(new RawPubSubType<Message>()));
+    auto* subscriber = SubscriberFor(PartitionFor<Message>(bench_id));
+    auto reader = std::make_unique<RawReader>();
+    reader->Attach(CreateReader(subscriber, topic, std::string(Traits::kReaderProfile), reader.get(), RawReader::Qos),
+                   subscriber);
+    return reader;
+  }
+
+  /// A writer of raw payloads (RawPubSubType, e.g. replayed from a recording) on `Message`'s
+  /// topic with its writer profile, in the partition of `bench_id` (and `controller_id`, for
+  /// commands). A payload is written as it is: its key is computed from it, nothing else checked.
+  template <typename Message>
+  std::unique_ptr<Writer<RawSample>> MakeRawWriter(const std::string& bench_id, const std::string& controller_id = {}) {
+    using Traits = TopicTraits<Message>;
+    auto* topic = TopicFor(std::string(Traits::kTopic), eprosima::fastdds::dds::TypeSupport(new RawPubSubType<Message>()));
+    auto* publisher = PublisherFor(PartitionFor<Message>(bench_id, controller_id));
+    return std::make_unique<Writer<RawSample>>(CreateWriter(publisher, topic, std::string(Traits::kWriterProfile)),
+                                               publisher);
+  }
+
   /// The partition a remote writer (SampleInfo::sample_identity.writer_guid()) was discovered
   /// in; "" if it is not (or no longer) known.
   std::string WriterPartition(const eprosima::fastrtps::rtps::GUID_t& writer) const;
@@ -248,10 +416,11 @@ class BusParticipant {
   eprosima::fastdds::dds::DataWriter* CreateWriter(eprosima::fastdds::dds::Publisher* publisher,
                                                    eprosima::fastdds::dds::Topic* topic,
                                                    const std::string& profile);
-  eprosima::fastdds::dds::DataReader* CreateReader(eprosima::fastdds::dds::Subscriber* subscriber,
-                                                   eprosima::fastdds::dds::Topic* topic,
-                                                   const std::string& profile,
-                                                   eprosima::fastdds::dds::DataReaderListener* listener);
+  /// A reader with the QoS of `profile`, changed by `adjust` if given.
+  eprosima::fastdds::dds::DataReader* CreateReader(
+      eprosima::fastdds::dds::Subscriber* subscriber, eprosima::fastdds::dds::Topic* topic, const std::string& profile,
+      eprosima::fastdds::dds::DataReaderListener* listener,
+      const std::function<void(eprosima::fastdds::dds::DataReaderQos&)>& adjust = {});
 
   class DiscoveryListener;
   std::string profiles_file_;

@@ -7,8 +7,12 @@
 #include <cerrno>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <memory>
+#include <queue>
 #include <stdexcept>
+#include <tuple>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -704,6 +708,40 @@ std::optional<McapSummary> ReadMcapSummary(const std::string& path) {
     }
   }
   return s;
+}
+
+bool IsMcapFile(const std::string& path) {
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (file == nullptr) return false;
+  char magic[kMagicSize] = {};
+  const bool is_mcap = std::fread(magic, 1, kMagicSize, file) == kMagicSize && std::memcmp(magic, kMagic, kMagicSize) == 0;
+  std::fclose(file);
+  return is_mcap;
+}
+
+McapReadResult ReadMcapInLogTimeOrder(const std::string& path, uint64_t window_ns,
+                                      const std::function<void(const McapChannel&, const McapMessage&)>& on_message) {
+  struct Held {
+    uint64_t order = 0;
+    McapMessage message;
+  };
+  const auto later = [](const Held& a, const Held& b) {
+    return std::tie(a.message.log_time_ns, a.order) > std::tie(b.message.log_time_ns, b.order);
+  };
+  std::priority_queue<Held, std::vector<Held>, decltype(later)> held(later);
+  std::map<uint16_t, McapChannel> channels;
+  uint64_t order = 0;
+  const auto release = [&] {
+    on_message(channels.at(held.top().message.channel_id), held.top().message);
+    held.pop();
+  };
+  McapReadResult result = ReadMcap(path, [&](const McapChannel& channel, const McapMessage& message) {
+    channels.try_emplace(channel.id, channel);
+    held.push({order++, message});
+    while (!held.empty() && held.top().message.log_time_ns + window_ns < message.log_time_ns) release();
+  });
+  while (!held.empty()) release();
+  return result;
 }
 
 }  // namespace dpc::record

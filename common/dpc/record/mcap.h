@@ -160,6 +160,16 @@ struct McapReadResult {
 McapReadResult ReadMcap(const std::string& path,
                         const std::function<void(const McapChannel&, const McapMessage&)>& on_message);
 
+/// True if `path` can be read and starts with the MCAP magic.
+bool IsMcapFile(const std::string& path);
+
+/// ReadMcap with the messages delivered in log-time order (file order for equal times): a
+/// recorder writes in the order it drains its readers, which may differ from the log times by a
+/// drain period; messages up to `window_ns` out of order in the file are put back in order.
+/// Memory: the messages within the window.
+McapReadResult ReadMcapInLogTimeOrder(const std::string& path, uint64_t window_ns,
+                                      const std::function<void(const McapChannel&, const McapMessage&)>& on_message);
+
 /// The summary section by the footer: schemas, channels, statistics and chunk count.
 struct McapSummary {
   std::map<uint16_t, McapSchema> schemas;

@@ -1,6 +1,6 @@
 // BusParticipant: profiles resolution, participants and typed readers and writers on the
 // loopback-only profile. Every participant here uses deploy/fastdds/loopback.xml and a DDS
-// domain of 64–68 (this file's share of the tests' range 60–79), so nothing leaves the host and
+// domain of 64–69 (this file's share of the tests' range 60–79), so nothing leaves the host and
 // no other test's traffic meets these.
 #include "dpc/bus/bus_participant.h"
 
@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <ctime>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -348,6 +349,62 @@ TEST(SecurityPropertiesTest, NameTheBenchFilesAndTheRevocationListOnceARotationW
   EXPECT_THROW(SecurityProperties({dir.string(), "operator"}), BusError);  // no such identity here
   EXPECT_THROW(SecurityProperties({dir.string(), "../driver"}), BusError);
   std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace dpc::bus
+
+namespace dpc::bus {
+namespace {
+
+constexpr int kRawDomain = 69;
+
+uint64_t WallNs() {
+  timespec t{};
+  clock_gettime(CLOCK_REALTIME, &t);
+  return static_cast<uint64_t>(t.tv_sec) * 1'000'000'000ull + static_cast<uint64_t>(t.tv_nsec);
+}
+
+TEST(RawReaderTest, DeliversEachPayloadAsItArrivedForKeyedTopics) {
+  BusParticipant publishing(BusOptions{kRawDomain, "dpc_bus_test_raw_writer", {}});
+  BusParticipant recording(BusOptions{kRawDomain, "dpc_bus_test_recorder", {}});
+  auto sample_reader = recording.MakeRawReader<msg::StokesSample>("bench1");
+  auto command_reader = recording.MakeRawReader<msg::WaveplateCommand>("bench1");
+  auto sample_writer = publishing.MakeWriter<msg::StokesSample>("bench1");
+  auto command_writer = publishing.MakeWriter<msg::WaveplateCommand>("bench1", "main");
+  ASSERT_TRUE(Eventually([&] {
+    return sample_reader->counters().matched_writers == 1 && command_reader->counters().matched_writers == 1;
+  }, 10s)) << "a raw reader matches the typed writers (same type name, keyed)";
+
+  msg::StokesSample sample;
+  sample.bench_id("bench1");
+  sample.sequence_number(41);
+  sample.s_out({0.0, 0.6, 0.8});
+  msg::WaveplateCommand command;
+  command.bench_id("bench1");
+  command.controller_id("main");
+  command.answers_sample(41);
+  std::vector<RawSample> samples, commands;
+  const uint64_t before_ns = WallNs();
+  ASSERT_TRUE(Eventually([&] {
+    sample_writer->Write(sample);
+    command_writer->Write(command);
+    sample_reader->TakeAll(&samples);
+    command_reader->TakeAll(&commands);
+    return !samples.empty() && !commands.empty();
+  }, 10s));
+  const uint64_t after_ns = WallNs();
+  // Both times are this host's wall clock, within the test's span, the reception after the source.
+  EXPECT_GE(samples.front().source_time_ns, before_ns - 1'000'000);
+  EXPECT_LE(samples.front().source_time_ns, samples.front().reception_time_ns);
+  EXPECT_LE(samples.front().reception_time_ns, after_ns + 1'000'000);
+  EXPECT_EQ(sample_reader->lost(), 0u);
+  // The exact bytes the writer's type support serialized, encapsulation header included.
+  EXPECT_EQ(samples.front().bytes, EncodeRaw(sample));
+  EXPECT_EQ(commands.front().bytes, EncodeRaw(command));
+  ASSERT_GE(samples.front().bytes.size(), 4u);
+  EXPECT_EQ(samples.front().bytes[0], '\0');
+  EXPECT_EQ(samples.front().bytes[1], '\1') << "CDR, little endian";
 }
 
 }  // namespace

@@ -31,6 +31,12 @@ _dpc() {
     --plot | --trace | --csv | --json-out | -o | --output | --assets | --security-dir)
       mapfile -t COMPREPLY < <(compgen -f -- "$cur")
       return ;;
+    --scenario)
+      mapfile -t COMPREPLY < <(compgen -f -X '!*.pbtxt' -- "$cur"; compgen -d -- "$cur")
+      return ;;
+    --topics)
+      mapfile -t COMPREPLY < <(compgen -W "sample command state status device target request reply summary" -- "$cur")
+      return ;;
   esac
   if [[ $command == topic ]]; then
     local sub="" j
@@ -57,6 +63,7 @@ _dpc() {
   case $command in
     sim | sweep) mapfile -t COMPREPLY < <(compgen -f -X '!*.pbtxt' -- "$cur"; compgen -d -- "$cur") ;;
     plot) mapfile -t COMPREPLY < <(compgen -f -- "$cur") ;;
+    info | replay) mapfile -t COMPREPLY < <(compgen -f -X '!*.mcap' -- "$cur"; compgen -d -- "$cur") ;;
   esac
 }
 complete -F _dpc dpc
