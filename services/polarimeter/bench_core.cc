@@ -113,10 +113,13 @@ BenchReport BenchCore::RunLockstep(BenchLink* link, SimulationObserver* observer
                                          target_->DistanceRad(s_out) * kRadToDeg});
     }
     line.Close(slot, issued);
-    if (((k + 1) & 1023) == 0 && !run.EndBlock(k + 1)) {
-      report.stop_reason = "stopped";
-      ++k;
-      break;
+    if (((k + 1) & 1023) == 0) {
+      if (settings_.lockstep_progress) settings_.lockstep_progress(k + 1, total);
+      if (!run.EndBlock(k + 1)) {
+        report.stop_reason = "stopped";
+        ++k;
+        break;
+      }
     }
   }
   report.samples = k;

@@ -56,6 +56,8 @@ struct BenchSettings {
   double rate_hz = 10e3;           ///< real time
   double duration_s = 0.0;         ///< real time: 0 runs until stopped
   double settle_s = 0.5;           ///< real time: statistics from this long after the first lock
+  /// Lockstep: called every 1024 samples with the samples done and the run's total.
+  std::function<void(int64_t done, int64_t total)> lockstep_progress;
 };
 
 struct BenchReport {

@@ -3,6 +3,7 @@
 //
 //   dpc-polarimeter [SCENARIO] [--rate-hz 10000] [--run-s 0]          real time until stopped
 //   dpc-polarimeter SCENARIO --lockstep [--trace FILE] [--json]       reproduces `dpc sim`
+//   dpc-polarimeter … --input-recording FILE.mcap [--input-from-s T]  the input SOP of a recording
 
 #include <iostream>
 #include <memory>
@@ -12,6 +13,8 @@
 #include "bench_core.h"
 #include "dds_bench_link.h"
 #include "dpc/bus/bus_participant.h"
+#include "dpc/bench/clock.h"
+#include "dpc/bus/recorded_bench.h"
 #include "dpc/cli/run_report.h"
 #include "dpc/sim/trace_header.h"
 #include "dpc/sim/trace_writer.h"
@@ -34,15 +37,70 @@ class TraceObserver final : public SimulationObserver {
   const Service* service_;
 };
 
+struct PolarimeterOptions {
+  BenchSettings bench;
+  double lockstep_timeout_s = 10.0;
+  std::string trace_path;
+  bool json = false;
+  double summary_hz = 20.0;
+  std::string input_recording;  ///< a dpc record file whose samples' S_in are the input
+  double input_from_s = 0.0;
+};
+
+/// The scenario, with the input SOP of a recording in place of its own when one is given.
+/// The lockstep's progress in the log, at most every 2 s ("lockstep: 4096 of 10000 samples"; dpc
+/// evaluate shows it).
+PolarimeterOptions WithProgressLog(PolarimeterOptions o) {
+  auto next_ns = std::make_shared<int64_t>(0);
+  o.bench.lockstep_progress = [next_ns](int64_t done, int64_t total) {
+    const int64_t now_ns = MonotonicNs();
+    if (now_ns < *next_ns) return;
+    *next_ns = now_ns + 2'000'000'000;
+    spdlog::info("lockstep: {} of {} samples", done, total);
+  };
+  return o;
+}
+
+ScenarioConfig LoadPolarimeterScenario(const CommonOptions& common, const PolarimeterOptions& o) {
+  ScenarioConfig scenario = LoadServiceScenario(common);
+  if (o.input_recording.empty()) return scenario;
+  bus::RecordedBenchOptions read;
+  read.from_s = o.input_from_s;
+  read.samples_only = true;
+  bus::RecordedBench recording;
+  try {
+    recording = bus::ReadRecordedBench(o.input_recording, read);
+  } catch (const std::exception& e) {
+    throw ConfigurationError(fmt::format("--input-recording: {}", e.what()));
+  }
+  if (recording.samples.empty()) {
+    throw ConfigurationError(fmt::format("--input-recording {}: no usable sample{}{}", o.input_recording,
+                                         o.input_from_s > 0 ? fmt::format(" after {} s", o.input_from_s) : "",
+                                         recording.rejected > 0 ? " (last rejected: " + recording.last_rejection + ")"
+                                                                : ""));
+  }
+  auto input = std::make_shared<RecordedInput>(recording.Input());
+  const double recorded_hz = recording.SampleRateHz();
+  const double bench_hz = o.bench.lockstep ? scenario.simulation.sample_rate_hz : o.bench.rate_hz;
+  spdlog::info("input: {} samples of {} (bench {}, recorded at {:.0f} Hz{}{}){}", input->sops.size(),
+               o.input_recording, recording.bench_id, recorded_hz,
+               recording.samples_missing > 0 ? fmt::format(", {} missing samples filled with the one before",
+                                                           recording.samples_missing)
+                                             : "",
+               recording.complete ? "" : ", the file is cut short: " + recording.problem,
+               recorded_hz > 0 && std::abs(recorded_hz - bench_hz) > 0.01 * bench_hz
+                   ? fmt::format("; this bench runs at {:.0f} Hz, so the recorded motion is {:.3g}× as fast", bench_hz,
+                                 bench_hz / recorded_hz)
+                   : "");
+  scenario.input.disturbances.clear();
+  scenario.input.initial_sop = input->sops.front();
+  scenario.input.recorded = std::move(input);
+  return scenario;
+}
+
 class PolarimeterService final : public Service {
  public:
-  struct Options {
-    BenchSettings bench;
-    double lockstep_timeout_s = 10.0;
-    std::string trace_path;
-    bool json = false;
-    double summary_hz = 20.0;
-  };
+  using Options = PolarimeterOptions;
 
   static void AddOptions(CLI::App& app, Options* o) {
     app.add_flag("--lockstep", o->bench.lockstep,
@@ -63,12 +121,19 @@ class PolarimeterService final : public Service {
     app.add_option("--summary-hz", o->summary_hz,
                    "Summaries of the bench per second on dpc_bench_summary (for dpc dashboard; 0: none)")
         ->check(CLI::Range(0.0, 100.0))->capture_default_str();
+    app.add_option("--input-recording", o->input_recording,
+                   "The input SOP of a recorded session (dpc record's .mcap): S_in of its samples, one per "
+                   "sample of this bench, in place of the scenario's input; the last one held past its end")
+        ->check(CLI::ExistingFile);
+    app.add_option("--input-from-s", o->input_from_s,
+                   "With --input-recording: start this far into the recording (its bench time)")
+        ->check(CLI::NonNegativeNumber)->capture_default_str();
   }
   static std::string LogName(const Options&) { return "polarimeter"; }
 
   PolarimeterService(const CommonOptions& common, const Options& options)
       : options_(options),
-        bench_(LoadServiceScenario(common), options.bench),  // validates: ScenarioError
+        bench_(LoadPolarimeterScenario(common, options), WithProgressLog(options).bench),  // validates: ScenarioError
         participant_({common.domain_id, "dpc-polarimeter/" + common.bench_id,
                       {common.security_dir, common.identity.empty() ? "polarimeter" : common.identity}},
                      bus::DescribedPeerEvents(PeerLogger())),

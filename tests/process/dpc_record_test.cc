@@ -18,6 +18,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "dpc/bus/bus_participant.h"
@@ -394,6 +395,83 @@ TEST_F(DpcRecordTest, AReplayPublishesTheRecordedRateScaledAndRefusesADomainWith
   EXPECT_NE(not_mcap.err.find("not an MCAP file"), std::string::npos) << not_mcap.err;
   const Result bad_topic = Dpc({"replay", file.string(), "--topics", "nope", "--domain", "95"});
   EXPECT_EQ(bad_topic.exit_code, 2) << bad_topic.err;
+}
+
+TEST_F(DpcRecordTest, EvaluateJudgesControllersOnARecordedSessionAndReproducesItsErrorStatistics) {
+  StartBench(96, 1000);
+  AwaitObeyed(96, "A");
+  const fs::path file = dir_ / "session.mcap";
+  Process& recorder = Start("record", {DPC_BINARY, "record", "-o", file.string(), "--duration-s", "4", "--domain", "96",
+                                       "--scenario", Scenario("bench_default")});
+  const auto recorded = recorder.Wait(60s);
+  ASSERT_TRUE(recorded.has_value() && *recorded == 0) << recorder.err();
+  while (!bench_.empty()) bench_.pop_back();  // the live bench is gone: the evaluation is offline
+
+  // The bench's own controller (the same settings as in the recording) twice, and one with a
+  // tenth of its step.
+  const fs::path logs = dir_ / "evaluate";
+  const Result r = Dpc({"evaluate", file.string(), "--controller", "{dpc-controller}", "--controller",
+                        "{dpc-controller} --id again", "--controller", "{dpc-controller} --step 0.05", "--name", "same",
+                        "--name", "again", "--name", "timid", "--json", "--domain", "97", "--logs", logs.string()},
+                       180s);
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const json j = json::parse(r.out);
+  const json& recording = j["recording"];
+  EXPECT_EQ(recording["bench_id"], "bench1");
+  EXPECT_GE(recording["samples"].get<int>(), 2500);  // 4 s, the first moments spent in discovery
+  EXPECT_NEAR(recording["sample_rate_hz"].get<double>(), 1000.0, 1.0);
+  EXPECT_GE(recording["loop_delay_samples"].get<int>(), 1);
+  EXPECT_LE(recording["loop_delay_samples"].get<int>(), 2) << "a 1-kHz loopback bench answers within a period";
+  EXPECT_EQ(recording["settings_from"], "the recording's scenario");
+  const double recorded_mean = recording["statistics"]["error_deg"]["mean"].get<double>();
+  ASSERT_GT(recorded_mean, 0.0);
+  ASSERT_EQ(j["runs"].size(), 3u);
+  for (const json& run : j["runs"]) ASSERT_TRUE(run["ok"].get<bool>()) << run.dump();
+  const json& same = j["runs"][0]["report"];
+  const json& again = j["runs"][1]["report"];
+  const json& timid = j["runs"][2]["report"];
+  // Every recorded sample's input was fed, in lockstep, through the recorded device.
+  EXPECT_EQ(same["samples"], recording["samples"].get<int>() + recording["samples_missing"].get<int>());
+  EXPECT_EQ(same["bench"]["mode"], "lockstep");
+  EXPECT_EQ(same["delay_samples"], recording["loop_delay_samples"]);
+  // The same controller reproduces the recorded session's error within the stated tolerance
+  // (README: ±25 % on the mean; the live bench's scheduling stalls are not in a lockstep run).
+  const double same_mean = same["error_deg"]["mean"].get<double>();
+  EXPECT_NEAR(same_mean / recorded_mean, 1.0, 0.25) << "recorded " << recorded_mean << "°, evaluated " << same_mean << "°";
+  // A lockstep evaluation is exact: the same controller gives the same figures.
+  EXPECT_DOUBLE_EQ(again["error_deg"]["mean"].get<double>(), same_mean);
+  EXPECT_DOUBLE_EQ(again["error_deg"]["max"].get<double>(), same["error_deg"]["max"].get<double>());
+  // And it tells controllers apart: a tenth of the step tracks the recorded input worse.
+  EXPECT_GT(timid["error_deg"]["mean"].get<double>(), 1.5 * same_mean) << timid.dump();
+  // What each controller said of itself on dpc_controller_status during its run.
+  const json& status = j["runs"][0]["controller"];
+  ASSERT_TRUE(status.is_object()) << j["runs"][0].dump();
+  EXPECT_EQ(status["law"], "gp");
+  EXPECT_GE(status["updates"].get<double>(), 0.9 * same["samples"].get<double>()) << status.dump();
+  EXPECT_EQ(status["failed_updates"], 0);
+  EXPECT_GT(status["sigma_min_min"].get<double>(), 0.0);
+  EXPECT_TRUE(fs::exists(logs / "scenario.pbtxt"));
+  EXPECT_TRUE(fs::exists(logs / "timid" / "controller.log"));
+
+  // The text table: a column per controller beside the recorded one.
+  const Result text = Dpc({"evaluate", file.string(), "--controller", "{dpc-controller}", "--domain", "97",
+                           "--duration-s", "1"},
+                          120s);
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_NE(text.out.find("recorded"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("error mean (°)"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("mean error / recorded"), std::string::npos) << text.out;
+
+  // A controller that fails is named with its log; what is not a recording is refused.
+  const Result failing = Dpc({"evaluate", file.string(), "--controller", "sh -c 'echo no such law >&2; exit 3'",
+                              "--domain", "97", "--duration-s", "1"},
+                             120s);
+  EXPECT_EQ(failing.exit_code, 1) << failing.err;
+  EXPECT_NE(failing.err.find("the controller ended (exit 3)"), std::string::npos) << failing.err;
+  EXPECT_NE(failing.err.find("no such law"), std::string::npos) << failing.err;
+  const Result not_mcap = Dpc({"evaluate", Write("not.mcap", "hello"), "--controller", "{dpc-controller}"});
+  EXPECT_EQ(not_mcap.exit_code, 2) << not_mcap.err;
+  EXPECT_NE(not_mcap.err.find("not an MCAP file"), std::string::npos) << not_mcap.err;
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 //   dpc info  FILE.mcap            what a recording holds (topics, counts, duration, rates, gaps)
 //   dpc record -o FILE.mcap        a bench's topics into an MCAP file
 //   dpc replay FILE.mcap           a recording re-published with its timing
+//   dpc evaluate FILE.mcap --controller CMD   controllers judged on a recorded session
 //   dpc topic list|echo|hz         the bench's DDS topics (discovery, samples, rates)
 //   dpc target --point S1 S2 S3    change a running bench's target (or --set-normal, --linear)
 //   dpc monitor                    a running bench's live status on one line
@@ -17,6 +18,7 @@
 #include "dpc/cli/command_line.h"
 #include "dpc/cli/exit_code.h"
 #include "dashboard_command.h"
+#include "evaluate_command.h"
 #include "info_command.h"
 #include "monitor_command.h"
 #include "plot_command.h"
@@ -46,6 +48,8 @@ int main(int argc, char** argv) {
   CLI::App* record = AddRecordCommand(app, &record_options);
   ReplayOptions replay_options;
   CLI::App* replay = AddReplayCommand(app, &replay_options);
+  EvaluateOptions evaluate_options;
+  CLI::App* evaluate = AddEvaluateCommand(app, &evaluate_options);
   TopicOptions topic_options;
   CLI::App* topic = AddTopicCommand(app, &topic_options);
   TargetOptions target_options;
@@ -73,6 +77,7 @@ int main(int argc, char** argv) {
   if (*info) return ToInt(RunInfoCommand(info_options));
   if (*record) return ToInt(RunRecordCommand(record_options));
   if (*replay) return ToInt(RunReplayCommand(replay_options));
+  if (*evaluate) return ToInt(RunEvaluateCommand(evaluate_options));
   if (*topic) return ToInt(RunTopicCommand(topic_options));
   if (*target) return ToInt(RunTargetCommand(target_options));
   if (*monitor) return ToInt(RunMonitorCommand(monitor_options));

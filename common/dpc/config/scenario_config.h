@@ -12,6 +12,7 @@
 // delay, control from 2 ms, gradient projection with step 0.1.
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -90,11 +91,23 @@ struct DisturbanceConfig {
   bool random_axis = false;
 };
 
+/// An input SOP taken from a recording (a bench session's measured S_in, one per sample),
+/// instead of a simulated one. Never written in a scenario file: a program that reads the
+/// recording sets it (dpc-polarimeter --input-recording, dpc evaluate).
+struct RecordedInput {
+  std::string source;                ///< where it comes from (a file name), for descriptions
+  std::vector<StokesVector> sops;    ///< S_in[k] for sample k, unit vectors
+};
+
 /// scenario.proto Input.
 struct InputConfig {
   StokesVector initial_sop = StokesVector::UnitX();
   /// Applied in order on every sample. Empty: the input SOP holds still.
   std::vector<DisturbanceConfig> disturbances;
+  /// Set: S_in[k] = recorded->sops[k] (the last one held past its end); initial_sop is then
+  /// sops[0] and there are no disturbances (validation refuses them beside it). Shared, not
+  /// copied, with every copy of the scenario (a recording holds millions of samples).
+  std::shared_ptr<const RecordedInput> recorded;
 };
 
 /// scenario.proto Simulation.

@@ -73,7 +73,27 @@ void ValidateDisturbance(const DisturbanceConfig& d, double sample_rate_hz,
   Fail(path, "unknown disturbance kind");
 }
 
+void ValidateRecordedInput(const RecordedInput& recorded, const InputConfig& input) {
+  if (recorded.sops.empty()) Fail("input.recorded", fmt::format("{}: no sample", recorded.source));
+  if (recorded.sops.size() > static_cast<size_t>(kMaxRecordedInputSamples)) {
+    Fail("input.recorded", fmt::format("{}: {} samples; at most {}", recorded.source, recorded.sops.size(),
+                                       kMaxRecordedInputSamples));
+  }
+  if (!input.disturbances.empty()) {
+    Fail("input.disturbances", fmt::format("{} disturbances beside a recorded input ({}); a recorded input is the "
+                                           "whole input",
+                                           input.disturbances.size(), recorded.source));
+  }
+  for (size_t k = 0; k < recorded.sops.size(); ++k) {
+    RequireUnitStokes(recorded.sops[k], fmt::format("input.recorded[{}]", k));
+  }
+}
+
 void ValidateInput(const InputConfig& input, double sample_rate_hz) {
+  if (input.recorded != nullptr) {
+    ValidateRecordedInput(*input.recorded, input);
+    return;
+  }
   RequireUnitStokes(input.initial_sop, "input.initial_sop");
   if (input.disturbances.size() > static_cast<size_t>(kMaxDisturbances)) {
     Fail("input.disturbances", fmt::format("{} disturbances; at most {}",

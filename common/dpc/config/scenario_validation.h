@@ -33,7 +33,8 @@
 //                kMaxDisturbances disturbances. Rates ≥ 0 (the axis sets the direction) and
 //                rate·dt < π rad per sample (the simulation could not resolve faster turns);
 //                axes non-zero. transient_burst: start_s ≥ 0, duration_s > 0, period_s = 0 or
-//                ≥ duration_s.
+//                ≥ duration_s. A recorded input (set by a program, never by a file): 1 …
+//                kMaxRecordedInputSamples unit Stokes vectors and no disturbances beside it.
 //   target       point: a unit Stokes vector. set n·S = c: |n| ≥ 1e-9, |c|/|n| < 1.
 //   controller   0 < step ≤ 1e6, and < 2 for every law but transpose and dither (the error
 //                contracts by (1 − step) per update); 0 ≤ nullspace_step < 2; threshold,
@@ -58,6 +59,8 @@ namespace dpc {
 
 /// The most disturbances an input may have.
 inline constexpr int kMaxDisturbances = 16;
+/// A recorded input holds at most this many samples (24 bytes each: 2.4 GB).
+inline constexpr int64_t kMaxRecordedInputSamples = 100'000'000;
 /// The longest loop delay (and dither settle / reset time), in samples.
 inline constexpr int64_t kMaxDelaySamples = 10'000'000;
 /// The most samples a run may have.

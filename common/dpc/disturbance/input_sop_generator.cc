@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "dpc/disturbance/disturbance_factory.h"
+#include "dpc/disturbance/recorded_input_disturbance.h"
 
 namespace dpc {
 
@@ -40,6 +41,14 @@ std::string InputSopGenerator::Describe() const {
 InputSopGenerator MakeInputSopGenerator(const InputConfig& input, uint64_t seed,
                                         double sample_rate_hz) {
   std::vector<std::unique_ptr<Disturbance>> disturbances;
+  if (input.recorded != nullptr) {
+    if (!input.disturbances.empty()) {
+      throw std::invalid_argument("input: disturbances beside a recorded input");
+    }
+    if (input.recorded->sops.empty()) throw std::invalid_argument("input.recorded: no sample");
+    disturbances.push_back(std::make_unique<RecordedInputDisturbance>(input.recorded));
+    return InputSopGenerator(input.recorded->sops.front(), std::move(disturbances), seed, sample_rate_hz);
+  }
   disturbances.reserve(input.disturbances.size());
   for (size_t i = 0; i < input.disturbances.size(); ++i) {
     try {

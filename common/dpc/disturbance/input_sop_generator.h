@@ -81,7 +81,8 @@ class InputSopGenerator {
   PaperScrambler* only_scrambler_ = nullptr;  ///< set when it is the only disturbance
 };
 
-/// Not real-time. The generator for `input` (MakeDisturbance for each entry, in order). Throws
+/// Not real-time. The generator for `input` (MakeDisturbance for each entry, in order; a
+/// recorded input: its first SOP, then a RecordedInputDisturbance). Throws
 /// std::invalid_argument for a bad initial SOP or disturbance.
 InputSopGenerator MakeInputSopGenerator(const InputConfig& input, uint64_t seed,
                                         double sample_rate_hz);

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 
 #include "support/scenario_fixture.h"
@@ -65,6 +66,25 @@ TEST_F(ScenarioValidationTest, NearlyUnitInitialSopIsAccepted) {
 TEST_F(ScenarioValidationTest, NonFiniteInitialSopComponentIsNamed) {
   scenario_.input.initial_sop = StokesVector(1.0, kNaN, 0.0);
   EXPECT_EQ(ErrorLocation(), "input.initial_sop.s2");
+}
+
+TEST_F(ScenarioValidationTest, ARecordedInputIsTheWholeInputOfUnitSops) {
+  auto recorded = std::make_shared<RecordedInput>();
+  recorded->source = "session.mcap";
+  recorded->sops = {StokesVector::UnitX(), StokesVector::UnitZ()};
+  scenario_.input.recorded = recorded;
+  scenario_.input.initial_sop = StokesVector(0.0, 0.3, 0.4);  // not used beside a recording
+  EXPECT_EQ(ErrorLocation(), "input.disturbances");  // the paper's scrambler beside it
+  EXPECT_THAT(ErrorMessage(), HasSubstr("beside a recorded input (session.mcap)"));
+  scenario_.input.disturbances.clear();
+  EXPECT_EQ(ErrorLocation(), "(valid)");
+  recorded->sops.push_back(StokesVector(0.0, kNaN, 1.0));
+  EXPECT_EQ(ErrorLocation(), "input.recorded[2].s2");
+  recorded->sops.back() = StokesVector(0.0, 0.6, 0.6);
+  EXPECT_EQ(ErrorLocation(), "input.recorded[2]");
+  recorded->sops.clear();
+  EXPECT_EQ(ErrorLocation(), "input.recorded");
+  EXPECT_THAT(ErrorMessage(), HasSubstr("session.mcap: no sample"));
 }
 
 TEST_F(ScenarioValidationTest, AtMostSixteenDisturbances) {
