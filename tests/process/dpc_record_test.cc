@@ -26,6 +26,7 @@
 #include "dpc/msg/bench_idl.h"
 #include "dpc/record/mcap.h"
 #include "support/bench_tools_fixture.h"
+#include "support/png_pixels.h"
 
 namespace {
 
@@ -472,6 +473,43 @@ TEST_F(DpcRecordTest, EvaluateJudgesControllersOnARecordedSessionAndReproducesIt
   const Result not_mcap = Dpc({"evaluate", Write("not.mcap", "hello"), "--controller", "{dpc-controller}"});
   EXPECT_EQ(not_mcap.exit_code, 2) << not_mcap.err;
   EXPECT_NE(not_mcap.err.find("not an MCAP file"), std::string::npos) << not_mcap.err;
+}
+
+TEST_F(DpcRecordTest, PlotDrawsARecordingWithTheDriversHoldShadedAndTheControllerSwitchesMarked) {
+  StartBench(98, 500);
+  AwaitObeyed(98, "A");
+  const fs::path file = dir_ / "switches.mcap";
+  Process& recorder = Start("record", {DPC_BINARY, "record", "-o", file.string(), "--duration-s", "7", "--domain", "98"});
+  ASSERT_TRUE(Eventually([&] { return recorder.err().find("1 s,") != std::string::npos; }, 20s)) << recorder.err();
+  // B of higher priority takes over, is killed (A again), then A is killed: the driver holds.
+  Process& b = Start("controller-b", {DPC_CONTROLLER_BINARY, "--domain", "98", "--id", "B", "--priority", "10"});
+  std::this_thread::sleep_for(1500ms);
+  b.Signal(SIGKILL);
+  std::this_thread::sleep_for(1500ms);
+  bench_[1]->Signal(SIGKILL);  // controller A (StartBench: driver, controller, polarimeter)
+  const auto code = recorder.Wait(30s);
+  ASSERT_TRUE(code.has_value() && *code == 0) << recorder.err();
+
+  const fs::path png = dir_ / "switches.png";
+  const fs::path trace = dir_ / "switches.csv";
+  const Result plot = Dpc({"plot", file.string(), "-o", png.string(), "--trace-out", trace.string()});
+  ASSERT_EQ(plot.exit_code, 0) << plot.out << plot.err;
+  std::smatch counts;
+  ASSERT_TRUE(std::regex_search(plot.out, counts,
+                                std::regex(R"(\((\d+) samples, (\d+) holding intervals?, (\d+) controller switch)")))
+      << plot.out;
+  EXPECT_GE(std::stoi(counts[1]), 2000) << plot.out;  // ~7 s at 500 Hz
+  EXPECT_GE(std::stoi(counts[2]), 1) << plot.out;     // the hold after A was killed
+  EXPECT_GE(std::stoi(counts[3]), 2) << plot.out;     // A → B, B → A
+  // The trace made from the recording is dpc plot's own format (it draws it again).
+  EXPECT_EQ(Slurp(trace).rfind("# dpc-trace", 0), 0u) << Slurp(trace).substr(0, 200);
+  const Result again = Dpc({"plot", trace.string(), "-o", (dir_ / "again.png").string()});
+  EXPECT_EQ(again.exit_code, 0) << again.err;
+  // What a person sees: the holding interval shaded, the switches drawn as lines.
+  const dpc::testing::PngPixels pixels = dpc::testing::ReadPngPixels(png.string());
+  EXPECT_GT(pixels.CountNear(0, pixels.height_px, dpc::testing::HexColour("#FBE3C9"), 6), 2000u) << "no shading";
+  EXPECT_GT(pixels.CountNear(0, pixels.height_px, dpc::testing::HexColour("#7B3294"), 30), 100u)
+      << "no switch marks";
 }
 
 }  // namespace

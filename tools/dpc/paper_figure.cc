@@ -326,7 +326,7 @@ void WritePaperFigure(const std::string& trace_csv, const std::string& png_path,
   for (size_t e = 0; e < events.size(); ++e) {
     fmt::format_to(out,
                    "set arrow {} from first {:.15g}, graph 0 to first {:.15g}, graph 1 nohead "
-                   "dt (1,2) lc rgb '{}' lw 1.2 front\n",
+                   "dt (4,3) lc rgb '{}' lw 1.5 front\n",
                    100 + e, events[e]->t_s * options.time_scale, events[e]->t_s * options.time_scale, kEventColour);
   }
   if (options.title.empty()) {
@@ -361,7 +361,10 @@ void WritePaperFigure(const std::string& trace_csv, const std::string& png_path,
                  "set ytics -1, 0.5, 1\n"
                  "set mytics 2\n"
                  "set ylabel 'S_{{out}}' enhanced\n"
-                 "set key outside right top vertical Left reverse samplen 2.5 spacing 1.15\n");
+                 // Opaque: the key can reach into the plot (the right margin is the error
+                 // panel's axis), and its samples must show over the data and the shading.
+                 "set key outside right top vertical Left reverse samplen 2.5 spacing 1.15 opaque "
+                 "box lc rgb '#CCCCCC'\n");
   if (options.target_point) {
     for (int k = 0; k < 3; ++k) {
       fmt::format_to(out,
@@ -396,7 +399,7 @@ void WritePaperFigure(const std::string& trace_csv, const std::string& png_path,
                    GnuplotQuote(options.shaded_label));
   }
   if (!events.empty()) {
-    fmt::format_to(out, ", \\\n     NaN with lines dt (1,2) lw 1.2 lc rgb '{}' title {}", kEventColour,
+    fmt::format_to(out, ", \\\n     NaN with lines dt (4,3) lw 1.5 lc rgb '{}' title {}", kEventColour,
                    GnuplotQuote(options.events_label));
   }
   fmt::format_to(out, "\nunset key\nunset arrow 1\nunset arrow 2\nunset arrow 3\n"
