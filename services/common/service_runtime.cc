@@ -48,11 +48,15 @@ void AddCommonOptions(CLI::App& app, CommonOptions* options) {
 }
 
 ScenarioConfig LoadServiceScenario(const CommonOptions& options) {
+  return LoadServiceScenario(options, DefaultBenchScenarioText(), "<bench_default.pbtxt>");
+}
+
+ScenarioConfig LoadServiceScenario(const CommonOptions& options, const char* default_text,
+                                   const std::string& default_name) {
   return cli::LoadScenarioWithOverrides(
       options.scenario_file, options.overrides,
-      options.scenario_file.empty()
-          ? ScenarioFromProto(ParseScenarioText(DefaultBenchScenarioText(), "<bench_default.pbtxt>"))
-          : ScenarioConfig{});
+      options.scenario_file.empty() ? ScenarioFromProto(ParseScenarioText(default_text, default_name))
+                                    : ScenarioConfig{});
 }
 
 std::string DescribeError(const ScenarioError& error, const CommonOptions& options) {

@@ -43,6 +43,10 @@ const char* DefaultBenchScenarioText();
 /// The scenario file's contents, or the embedded default, with the override flags applied;
 /// unvalidated (each service validates the parts it uses). Throws ScenarioError.
 ScenarioConfig LoadServiceScenario(const CommonOptions& options);
+/// The same with another embedded default: `default_text` (a scenario's text format, named
+/// `default_name` in syntax errors) when no file is given. dpc-emulator's true device.
+ScenarioConfig LoadServiceScenario(const CommonOptions& options, const char* default_text,
+                                   const std::string& default_name);
 
 /// "invalid scenario: controller.step: … (set by --step)".
 std::string DescribeError(const ScenarioError& error, const CommonOptions& options);

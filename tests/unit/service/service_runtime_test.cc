@@ -82,6 +82,28 @@ TEST_F(ServiceRuntimeTest, APositionalFileReplacesTheEmbeddedScenario) {
   EXPECT_NEAR(scenario.controller.step, 0.25, kTolerance);
 }
 
+TEST_F(ServiceRuntimeTest, AnotherEmbeddedDefaultStandsInForTheFileWithTheOverridesApplied) {
+  constexpr const char* kDefault =
+      "name: \"own-default\"\n"
+      "stages { axis: S1 map { polynomial { coefficients_rad: [ 0, 0.62, 0, 3e-4 ] } } }\n";
+  app_.parse("--noise-deg 0.25", false);
+  const ScenarioConfig scenario = LoadServiceScenario(options_, kDefault, "<own.pbtxt>");
+  EXPECT_EQ(scenario.name, "own-default");
+  ASSERT_EQ(scenario.stages.size(), 1u);
+  EXPECT_EQ(scenario.stages[0].map.coefficients_rad, (std::vector<double>{0, 0.62, 0, 3e-4}));
+  EXPECT_NEAR(scenario.simulation.polarimeter_noise_deg, 0.25, kTolerance);
+  try {
+    LoadServiceScenario(options_, "stages { axis: S7 }", "<own.pbtxt>");
+    FAIL() << "a bad default was parsed";
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(e.location().rfind("<own.pbtxt>:1:", 0), 0u) << e.what();
+  }
+  // A file still wins over the default.
+  const std::string path = WriteScenario("name: \"from-file\"\nstages { axis: S3 }\n");
+  app_.parse(path, false);
+  EXPECT_EQ(LoadServiceScenario(options_, kDefault, "<own.pbtxt>").name, "from-file");
+}
+
 TEST_F(ServiceRuntimeTest, AMissingFileIsRefusedByTheCommandLine) {
   EXPECT_THROW(app_.parse((directory_ / "missing.pbtxt").string(), false), CLI::ValidationError);
 }
