@@ -37,7 +37,7 @@ install(FILES ${PROJECT_BINARY_DIR}/jacobian_dpcConfig.cmake ${PROJECT_BINARY_DI
 
 # The programs and what they read at run time (BusParticipant finds
 # <bin>/../share/dpc/fastdds/loopback.xml, dpc dashboard <bin>/../share/dpc/dashboard).
-install(TARGETS dpc dpc-driver dpc-controller dpc-polarimeter RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(TARGETS dpc dpc-driver dpc-controller dpc-polarimeter dpc-emulator RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(FILES ${PROJECT_SOURCE_DIR}/deploy/fastdds/loopback.xml DESTINATION ${CMAKE_INSTALL_DATADIR}/dpc/fastdds)
 install(PROGRAMS ${PROJECT_SOURCE_DIR}/deploy/fastdds/make_profile.sh DESTINATION ${CMAKE_INSTALL_DATADIR}/dpc/fastdds)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/deploy/scenarios/ DESTINATION ${CMAKE_INSTALL_DATADIR}/dpc/scenarios

@@ -1,5 +1,5 @@
 // What every entry point says about itself and about a command line it cannot take: --version
-// names the project's and Fast DDS's versions (dpc and the three services); an unknown
+// names the project's and Fast DDS's versions (dpc, the three services and the emulator); an unknown
 // subcommand or option is named, with the nearest known one, and exits 2.
 
 #include <gtest/gtest.h>
@@ -29,7 +29,8 @@ TEST_F(EntryPointsTest, VersionNamesTheProjectAndFastDdsEverywhere) {
   const std::vector<std::pair<std::string, std::string>> binaries = {{DPC_BINARY, "dpc"},
                                                                      {DPC_DRIVER_BINARY, "dpc-driver"},
                                                                      {DPC_CONTROLLER_BINARY, "dpc-controller"},
-                                                                     {DPC_POLARIMETER_BINARY, "dpc-polarimeter"}};
+                                                                     {DPC_POLARIMETER_BINARY, "dpc-polarimeter"},
+                                                                     {DPC_EMULATOR_BINARY, "dpc-emulator"}};
   for (const auto& [binary, name] : binaries) {
     const Result r = RunBinary(binary, {"--version"});
     EXPECT_EQ(r.exit_code, 0) << name << ": " << r.err;
@@ -53,6 +54,8 @@ TEST_F(EntryPointsTest, AnUnknownOptionIsNamedNotTakenForAScenarioFile) {
   ExpectRefused(RunBinary(DPC_CONTROLLER_BINARY, {"--prioity", "3"}),
                 "dpc-controller: unknown option --prioity (did you mean --priority?)");
   ExpectRefused(RunBinary(DPC_DRIVER_BINARY, {"--max-slew", "3", "x.pbtxt"}), "dpc-driver: unknown option --max-slew");
+  ExpectRefused(RunBinary(DPC_EMULATOR_BINARY, {"--dac-bit", "12"}),
+                "dpc-emulator: unknown option --dac-bit (did you mean --dac-bits?)");
 }
 
 TEST_F(EntryPointsTest, KnownOptionsValuesAndHelpStillParse) {

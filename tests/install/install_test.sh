@@ -14,15 +14,16 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 prefix=$work/prefix
 
 cmake --install "$build" --prefix "$prefix" >"$work/install.log" || { cat "$work/install.log"; fail "cmake --install"; }
-for f in bin/dpc bin/dpc-driver bin/dpc-controller bin/dpc-polarimeter share/dpc/fastdds/loopback.xml \
-         share/dpc/fastdds/make_profile.sh share/dpc/scenarios/paper_fig3.pbtxt share/dpc/idl/dpc/bench.idl \
+for f in bin/dpc bin/dpc-driver bin/dpc-controller bin/dpc-polarimeter bin/dpc-emulator share/dpc/fastdds/loopback.xml \
+         share/dpc/fastdds/make_profile.sh share/dpc/scenarios/paper_fig3.pbtxt \
+         share/dpc/scenarios/emulator_epc.pbtxt share/dpc/idl/dpc/bench.idl \
          share/dpc/security/make-bench-pki.sh share/bash-completion/completions/dpc \
          include/dpc/optics/waveplate_chain.h include/dpc/sim/closed_loop_simulator.h \
          lib/cmake/jacobian_dpc/jacobian_dpcConfig.cmake lib/cmake/jacobian_dpc/jacobian_dpcConfigVersion.cmake; do
   [[ -e $prefix/$f ]] || fail "$f not installed"
 done
 echo "installed into $prefix: $(find "$prefix" -type f | wc -l) files"
-for program in dpc dpc-driver dpc-controller dpc-polarimeter; do
+for program in dpc dpc-driver dpc-controller dpc-polarimeter dpc-emulator; do
   version=$("$prefix/bin/$program" --version) || fail "$program --version"
   [[ $version == *"Fast DDS"* ]] || fail "$program --version: $version"
 done
