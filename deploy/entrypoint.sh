@@ -27,7 +27,9 @@
 #                          PRIVATE and gives each container a directory in DPC_PKI_PUBLIC with
 #                          only its identity (never the CA's key): <identity>/ for each one,
 #                          tools/ with operator and observer; hands them to DPC_PKI_OWNER
-#                          (10001:10001, the image's dpc user) and writes ready in each
+#                          (10001:10001, the image's dpc user) and writes ready in each;
+#                          also hands DPC_RECORDINGS (the recorder's directory), if mounted, to
+#                          that user
 set -euo pipefail
 
 fastdds_dir="${DPC_FASTDDS_DIR:-/opt/dpc/share/dpc/fastdds}"
@@ -118,6 +120,12 @@ if [[ "${1:-}" == "make-bench-pki" ]]; then
   done
   grant tools operator observer
   echo "dpc-entrypoint: credentials in $public/<identity> and $public/tools (the CA and its key in $out)" >&2
+  # The recorder's directory on the host (a bind mount Docker creates as root): handed to the
+  # image's user, whom the recorder runs as.
+  if [[ -n "${DPC_RECORDINGS:-}" && -d "$DPC_RECORDINGS" ]]; then
+    chown "${DPC_PKI_OWNER:-10001:10001}" "$DPC_RECORDINGS"
+    echo "dpc-entrypoint: recordings go to $DPC_RECORDINGS (owner ${DPC_PKI_OWNER:-10001:10001})" >&2
+  fi
   exit 0
 fi
 

