@@ -194,6 +194,16 @@ DriverState DriverCore::Apply(const ControllerCommand& command, int64_t now_ns, 
 }
 
 std::optional<DriverState> DriverCore::Tick(int64_t now_ns, int64_t wall_ns) {
+  // A device that cannot be driven (disconnected, silent, answering garbage): hold the last
+  // good φ at once and say why, rather than at the next command.
+  if (!arbiter_.holding()) {
+    if (std::string fault = backend_->fault(); !fault.empty()) {
+      arbiter_.Hold(fmt::format("holding: backend {} failed: {}", backend_->name(), fault));
+      saturated_.fill(false);
+      StopMotion();
+      return Publishable(wall_ns);
+    }
+  }
   if (!arbiter_.holding()) {
     if (!arbiter_.Check(now_ns)) return std::nullopt;
     // The obeyed controller fell silent: another one is obeyed, or the driver holds.

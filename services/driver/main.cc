@@ -1,5 +1,6 @@
 // dpc-driver: the waveplate driver. Obeys one controller (priority, liveness), validates,
-// clamps and slew-limits its commands, applies them to the backend (the simulated device) and
+// clamps and slew-limits its commands, applies them to the backend (the simulated device, or a
+// real one over a serial port or TCP: the scenario's waveplate_device) and
 // publishes the state; owns the device description and the target on the bus.
 //
 //   dpc-driver [SCENARIO] [--domain N] [--bench-id ID] [--max-slew-per-s X] [--min-silence-s T]
@@ -19,6 +20,7 @@
 #include "dpc/config/scenario_builders.h"
 #include "dpc/config/scenario_validation.h"
 #include "driver_core.h"
+#include "line_waveplates.h"
 #include "log_limiter.h"
 #include "service.h"
 #include "target_authority.h"
@@ -81,9 +83,9 @@ class DriverService final : public Service {
       : bench_id_(common.bench_id),
         tick_s_(options.tick_s),
         scenario_(LoadDriverScenario(common)),
-        record_(MakeRecord(common, options, scenario_)),
-        backend_(InitialPhi(scenario_, record_.get()), DeviceLimits{}, record_.get()),
-        core_(scenario_.stages, options.settings, &backend_),
+        record_(scenario_.waveplate_device ? nullptr : MakeRecord(common, options, scenario_)),
+        backend_(MakeBackend(scenario_, record_.get())),
+        core_(scenario_.stages, WithDeviceRamps(options.settings, *backend_), backend_.get()),
         targets_(scenario_.target, TargetAuthority::EpochNow()),
         participant_({common.domain_id, "dpc-driver/" + common.bench_id,
                       {common.security_dir, common.identity.empty() ? "driver" : common.identity}},
@@ -94,7 +96,7 @@ class DriverService final : public Service {
         reply_writer_(participant_.MakeWriter<msg::TargetReply>(bench_id_)) {
     device_writer_->Write(bus::DeviceMessage(
         DeviceDescription{options.settings.driver_id, scenario_.stages, core_.max_slew_per_s(),
-                          options.settings.max_ramp_s},
+                          WithDeviceRamps(options.settings, *backend_).max_ramp_s},
         bench_id_));
     targets_revision_ = targets_.current().revision;
     first_target_ns_ = WallClockNs();  // (the source timestamp the other drivers see, near enough)
@@ -170,6 +172,28 @@ class DriverService final : public Service {
     } catch (const std::runtime_error& e) {
       throw std::runtime_error(fmt::format("--device-record: {}", e.what()));
     }
+  }
+
+  /// The scenario's device: a line-protocol one (waveplate_device), else the simulated one.
+  static std::unique_ptr<WaveplateBackend> MakeBackend(const ScenarioConfig& scenario, DeviceRecord* record) {
+    if (!scenario.waveplate_device) {
+      return std::make_unique<SimulatedWaveplates>(InitialPhi(scenario, record), DeviceLimits{}, record);
+    }
+    const WaveplateChain chain = BuildChain(scenario.stages);
+    std::vector<ControlRange> ranges;
+    for (size_t i = 0; i < chain.range_min().size(); ++i) ranges.push_back({chain.range_min()[i], chain.range_max()[i]});
+    auto device = std::make_unique<LineWaveplates>(
+        *scenario.waveplate_device, InitialPhi(scenario, nullptr), ranges,
+        [](bool warning, const std::string& text) { warning ? spdlog::warn("{}", text) : spdlog::info("{}", text); });
+    if (device->started_from_read_back()) spdlog::info("starting where the device's channels read back");
+    return device;
+  }
+
+  /// A device that cannot ramp gets no rates: the driver describes no ramps, and controllers
+  /// compensate the latency instead.
+  static DriverSettings WithDeviceRamps(DriverSettings settings, const WaveplateBackend& backend) {
+    if (!backend.ramps()) settings.max_ramp_s = 0.0;
+    return settings;
   }
 
   /// Where the device's record says the waveplates are (inside the ranges), else the
@@ -298,7 +322,7 @@ class DriverService final : public Service {
   double tick_s_;
   ScenarioConfig scenario_;
   std::unique_ptr<DeviceRecord> record_;
-  SimulatedWaveplates backend_;
+  std::unique_ptr<WaveplateBackend> backend_;
   std::mutex mutex_;             ///< the core, the target authority and the messages below
   DriverCore core_;
   TargetAuthority targets_;

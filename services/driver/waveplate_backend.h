@@ -1,6 +1,7 @@
 #pragma once
-// Where the driver's validated commands go. The simulated device now; a hardware backend (a
-// DAC, a piezo controller, a motor stage) implements the same interface later.
+// Where the driver's validated commands go: the simulated device (below) or a real one
+// (line_waveplates.h: an electronic polarization controller over a serial port or TCP). A lab's
+// own device (a DAC card, a piezo controller, a motor stage) implements the same interface.
 //
 // A command is a motion, not only a point: φ at the ramp's start plus a rate in bench time,
 // for a bounded interval (WaveplateMotion). A backend with its own update clock (a DAC
@@ -32,6 +33,12 @@ class WaveplateBackend {
   /// What the device reports it is doing (the simulated device: exactly the last Apply).
   virtual const WaveplateMotion& Applied() const = 0;
   virtual std::string name() const = 0;
+  /// Whether the device follows a motion's rate (else it holds each point: the driver then
+  /// describes no ramps, and controllers compensate the latency instead).
+  virtual bool ramps() const { return true; }
+  /// Why the device cannot be driven now (disconnected, not answering, answering garbage);
+  /// empty while it can. The driver holds while this is set and says why in its state.
+  virtual std::string fault() const { return {}; }
 };
 
 /// The simulated device: applies instantly and exactly, within its limits (by default ±100 φ

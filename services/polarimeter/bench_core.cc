@@ -210,4 +210,83 @@ BenchReport BenchCore::RunRealTime(BenchLink* link, SimulationObserver* observer
   return report;
 }
 
+BenchReport BenchCore::RunInstrument(BenchLink* link, InstrumentPolarimeter* polarimeter, SimulationObserver* observer,
+                                     const std::function<void(const std::string&)>& on_failure) {
+  prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
+  const WaveplateChain& chain = *chain_;
+  const int64_t period_ns = SecondsToNs(1.0 / settings_.rate_hz);
+  const int64_t run_ns = settings_.duration_s > 0.0 ? SecondsToNs(settings_.duration_s) : INT64_MAX;
+  std::unique_ptr<Target> target = std::make_unique<Target>(*target_);
+  auto statistics = std::make_unique<RunStatistics>(*target, chain.control_count(), 0.0,
+                                                    scenario_.simulation.lock_threshold_deg, std::nullopt,
+                                                    settings_.settle_s);
+  double statistics_origin_s = 0.0;
+  ChainPose pose;
+  ControlVector phi = initial_phi_;
+  ControlVector phi_now = initial_phi_;
+  WaveplateMotion motion = WaveplateMotion::Still(initial_phi_);
+  chain.ComputePose(phi, &pose);
+
+  BenchReport report;
+  const int64_t start_ns = MonotonicNs();
+  int64_t next_ns = start_ns;
+  uint64_t sequence = 0;
+  while (true) {
+    if (link->stop_requested()) {
+      report.stop_reason = "stopped";
+      break;
+    }
+    SleepUntilMonotonicNs(next_ns);
+    if (MonotonicNs() - start_ns >= run_ns) break;
+    const int64_t now_ns = MonotonicNs();
+    if (now_ns - next_ns > period_ns) {
+      report.overruns += (now_ns - next_ns) / period_ns;
+      next_ns = now_ns;
+    }
+    next_ns += period_ns;
+    ++report.samples;
+    std::string why;
+    const std::optional<PolarimeterReading> reading = polarimeter->Measure(now_ns, &why);
+    if (!reading) {
+      ++report.failed_readings;
+      on_failure(why);
+      continue;
+    }
+    const int64_t t_ns = reading->reply_ns - start_ns;
+    const double t_s = static_cast<double>(t_ns) * 1e-9;
+    if (auto change = link->TargetChange()) {
+      target = std::make_unique<Target>(BuildTarget(*change));
+      statistics = std::make_unique<RunStatistics>(*target, chain.control_count(), 0.0,
+                                                   scenario_.simulation.lock_threshold_deg, std::nullopt,
+                                                   settings_.settle_s);
+      statistics_origin_s = t_s;
+    }
+    if (link->TakeApplied(&motion) || motion.moving) {
+      motion.At(t_ns, &phi_now);
+      if (phi_now != phi) {
+        phi = phi_now;
+        chain.ComputePose(phi, &pose);
+      }
+    }
+    // What the instrument does not measure, from the model at the applied φ.
+    const StokesVector s_in = reading->s_in ? *reading->s_in : StokesVector(chain.MuellerMatrix(pose).transpose() * *reading->s_out);
+    const StokesVector s_out = reading->s_out ? *reading->s_out : chain.Output(pose, s_in);
+    if (t_s >= statistics_origin_s) statistics->AddSample(t_s - statistics_origin_s, s_out, pose.phi);
+    if (observer != nullptr && observer->wants_samples()) {
+      observer->OnSample(SampleView{static_cast<int64_t>(sequence), t_s, s_in, s_out, pose.phi,
+                                    target->DistanceRad(s_out) * kRadToDeg});
+    }
+    link->Publish(MakeSample(++sequence, t_ns, s_in, s_out));
+    ++report.published;
+  }
+  const double wall_s = static_cast<double>(MonotonicNs() - start_ns) * 1e-9;
+  report.result.summary = statistics->Summarize(static_cast<int64_t>(sequence), 0);
+  report.result.wall_time_s = wall_s;
+  report.result.samples_per_s = wall_s > 0.0 ? static_cast<double>(sequence) / wall_s : 0.0;
+  report.result.final_phi = phi;
+  report.achieved_rate_hz = report.result.samples_per_s;
+  if (report.stop_reason.empty()) report.stop_reason = "end of --run-s";
+  return report;
+}
+
 }  // namespace dpc::services

@@ -30,6 +30,7 @@
 #include "dpc/control/target.h"
 #include "dpc/optics/waveplate_chain.h"
 #include "dpc/sim/closed_loop_simulator.h"
+#include "instrument_polarimeter.h"
 
 namespace dpc::services {
 
@@ -62,6 +63,7 @@ struct BenchSettings {
 
 struct BenchReport {
   SimulationResult result;
+  int64_t failed_readings = 0;     ///< a real polarimeter: periods without a reading
   int64_t samples = 0;
   int64_t published = 0;
   int64_t overruns = 0;            ///< real time: sample periods the loop came late for
@@ -78,6 +80,14 @@ class BenchCore {
   /// Runs until the scenario's duration (lockstep), --duration-s (real time) or a stop.
   /// `observer` gets every sample (traces) and progress, as in ClosedLoopSimulator::Run.
   BenchReport Run(BenchLink* link, SimulationObserver* observer);
+
+  /// Real time with a real polarimeter instead of the simulated optics: every 1/rate_hz one
+  /// reading, published with the time its reply arrived; what the instrument does not measure
+  /// (S_in or S_out) comes from the model, the chain at the applied φ (S_out = M·S_in,
+  /// S_in = Mᵀ·S_out). A period without a reading publishes nothing; `on_failure` gets why
+  /// (from the bench's thread). The statistics are of the measured (or modelled) S_out.
+  BenchReport RunInstrument(BenchLink* link, InstrumentPolarimeter* polarimeter, SimulationObserver* observer,
+                            const std::function<void(const std::string&)>& on_failure);
 
   const ScenarioConfig& scenario() const { return scenario_; }
   const WaveplateChain& chain() const { return *chain_; }

@@ -4,6 +4,7 @@
 //   dpc-polarimeter [SCENARIO] [--rate-hz 10000] [--run-s 0]          real time until stopped
 //   dpc-polarimeter SCENARIO --lockstep [--trace FILE] [--json]       reproduces `dpc sim`
 //   dpc-polarimeter … --input-recording FILE.mcap [--input-from-s T]  the input SOP of a recording
+//   dpc-polarimeter SCENARIO-WITH-polarimeter_device [--rate-hz N]    a real polarimeter (serial/TCP)
 
 #include <iostream>
 #include <memory>
@@ -18,6 +19,8 @@
 #include "dpc/cli/run_report.h"
 #include "dpc/sim/trace_header.h"
 #include "dpc/sim/trace_writer.h"
+#include "instrument_polarimeter.h"
+#include "log_limiter.h"
 #include "service.h"
 
 namespace dpc::services {
@@ -63,6 +66,15 @@ PolarimeterOptions WithProgressLog(PolarimeterOptions o) {
 
 ScenarioConfig LoadPolarimeterScenario(const CommonOptions& common, const PolarimeterOptions& o) {
   ScenarioConfig scenario = LoadServiceScenario(common);
+  if (scenario.polarimeter_device) {
+    // A real polarimeter measures what the optics do, in real time.
+    if (o.bench.lockstep) throw ConfigurationError("--lockstep: the scenario has a polarimeter_device (a real "
+                                                   "instrument measures in real time)");
+    if (!o.input_recording.empty()) {
+      throw ConfigurationError("--input-recording: the scenario has a polarimeter_device (the input is the "
+                               "instrument's)");
+    }
+  }
   if (o.input_recording.empty()) return scenario;
   bus::RecordedBenchOptions read;
   read.from_s = o.input_from_s;
@@ -143,6 +155,10 @@ class PolarimeterService final : public Service {
         link_(&participant_, bench_.control_count(), common.bench_id, options.lockstep_timeout_s,
               options.bench.lockstep ? 0.0 : options.bench.settle_s, options.summary_hz,
               bench_.scenario().target) {
+    if (bench_.scenario().polarimeter_device) {
+      instrument_ = std::make_unique<InstrumentPolarimeter>(*bench_.scenario().polarimeter_device);
+      spdlog::info("samples from {} ({} per sample)", instrument_->name(), instrument_->device().query);
+    }
     if (!options.trace_path.empty()) {
       std::vector<std::string> names;
       for (const auto& c : bench_.chain().controls()) names.push_back(c.name);
@@ -159,7 +175,12 @@ class PolarimeterService final : public Service {
 
   cli::ExitCode run() override {
     TraceObserver observer(trace_.get(), this);
-    const BenchReport report = bench_.Run(&link_, &observer);
+    const BenchReport report =
+        instrument_ ? bench_.RunInstrument(&link_, instrument_.get(), &observer,
+                                           [this](const std::string& why) {
+                                             failures_.Log(spdlog::level::warn, "instrument", "no reading: " + why);
+                                           })
+                    : bench_.Run(&link_, &observer);
     if (trace_) trace_->Flush();
     const RunSummary& s = report.result.summary;
     spdlog::info("{}: {} samples ({} published) at {:.0f} Hz, {} overruns, {} rejected states; "
@@ -185,6 +206,13 @@ class PolarimeterService final : public Service {
                       {"state_deadline_misses", link_.state_counters().deadline_misses.load()},
                       {"stop_reason", report.stop_reason},
                       {"loop_latency_us", latency}};
+      if (instrument_) {
+        const InstrumentPolarimeter::Counters& c = instrument_->counters();
+        out["instrument"] = {{"name", instrument_->name()},         {"queries", c.queries},
+                             {"readings", c.readings},              {"timeouts", c.timeouts},
+                             {"refused_replies", c.refused_replies}, {"connects", c.connects},
+                             {"failed_connects", c.failed_connects}, {"failed_periods", report.failed_readings}};
+      }
       std::cout << out.dump() << std::endl;
     }
     const bool failed = options_.bench.lockstep && report.stop_reason != "end of scenario" &&
@@ -204,6 +232,8 @@ class PolarimeterService final : public Service {
   bus::BusParticipant participant_;
   DdsBenchLink link_;
   std::unique_ptr<TraceWriter> trace_;
+  std::unique_ptr<InstrumentPolarimeter> instrument_;  ///< a real polarimeter, if the scenario has one
+  LogLimiter failures_;  ///< the instrument's failed readings, rate-limited with counts
 };
 
 }  // namespace

@@ -167,6 +167,68 @@ inline void ExpectSameAngle(const StageAngleConfig& a, const StageAngleConfig& b
   ExpectSameRange(a.range, b.range);
 }
 
+/// Real instruments: a serial EPC with every field, a TCP polarimeter measuring both SOPs.
+constexpr const char* kInstrumentsText = R"pb(
+name: "instruments"
+stages { name: "wp1" axis: S1 map { table { control: [ -10, 0, 10 ] angle_rad: [ -6.1, 0, 6.4 ] } } range { min: -9 max: 9 } }
+stages { name: "wp2" axis: S3 map { linear { rad_per_unit: 0.6 } } range { min: -9 max: 9 } }
+stages { name: "wp3" axis: S1 map { linear { rad_per_unit: 0.6 } } range { min: -9 max: 9 } }
+waveplate_device {
+  link { serial { path: "/dev/ttyUSB0" baud: 57600 } response_timeout_s: 0.02 reconnect_min_s: 0.1 reconnect_max_s: 5 }
+  set_command: "CH{channel} DAC {code}"
+  channels: [ 4, 2, 7 ]
+  ack: "ACK"
+  identify: "ID?"
+  read_command: "CH{channel} V?"
+  volts_min: -9.5
+  volts_max: 9.5
+  dac_bits: 14
+  max_slew_v_per_s: 500
+}
+polarimeter_device {
+  link { tcp { host: "127.0.0.1" port: 5025 } response_timeout_s: 0.01 }
+  query: "READ:BOTH?"
+  reply: S_IN_AND_S_OUT
+  min_dop: 0.3
+}
+)pb";
+
+inline void ExpectSameLink(const InstrumentLinkConfig& a, const InstrumentLinkConfig& b) {
+  EXPECT_EQ(a.kind, b.kind);
+  EXPECT_EQ(a.host, b.host);
+  EXPECT_EQ(a.port, b.port);
+  EXPECT_EQ(a.path, b.path);
+  EXPECT_EQ(a.baud, b.baud);
+  EXPECT_EQ(a.response_timeout_s, b.response_timeout_s);
+  EXPECT_EQ(a.reconnect_min_s, b.reconnect_min_s);
+  EXPECT_EQ(a.reconnect_max_s, b.reconnect_max_s);
+}
+
+inline void ExpectSameInstruments(const ScenarioConfig& a, const ScenarioConfig& b) {
+  ASSERT_EQ(a.waveplate_device.has_value(), b.waveplate_device.has_value());
+  if (a.waveplate_device) {
+    const WaveplateDeviceConfig &x = *a.waveplate_device, &y = *b.waveplate_device;
+    ExpectSameLink(x.link, y.link);
+    EXPECT_EQ(x.set_command, y.set_command);
+    EXPECT_EQ(x.channels, y.channels);
+    EXPECT_EQ(x.ack, y.ack);
+    EXPECT_EQ(x.identify, y.identify);
+    EXPECT_EQ(x.read_command, y.read_command);
+    EXPECT_EQ(x.volts_min, y.volts_min);
+    EXPECT_EQ(x.volts_max, y.volts_max);
+    EXPECT_EQ(x.dac_bits, y.dac_bits);
+    EXPECT_EQ(x.max_slew_v_per_s, y.max_slew_v_per_s);
+  }
+  ASSERT_EQ(a.polarimeter_device.has_value(), b.polarimeter_device.has_value());
+  if (a.polarimeter_device) {
+    const PolarimeterDeviceConfig &x = *a.polarimeter_device, &y = *b.polarimeter_device;
+    ExpectSameLink(x.link, y.link);
+    EXPECT_EQ(x.query, y.query);
+    EXPECT_EQ(x.reply, y.reply);
+    EXPECT_EQ(x.min_dop, y.min_dop);
+  }
+}
+
 inline void ExpectSameScenario(const ScenarioConfig& a, const ScenarioConfig& b) {
   EXPECT_EQ(a.name, b.name);
   EXPECT_EQ(a.description, b.description);
@@ -226,6 +288,7 @@ inline void ExpectSameScenario(const ScenarioConfig& a, const ScenarioConfig& b)
   EXPECT_EQ(s.lock_threshold_deg, t.lock_threshold_deg);
   EXPECT_EQ(s.statistics_start_s, t.statistics_start_s);
   EXPECT_EQ(s.settle_samples, t.settle_samples);
+  ExpectSameInstruments(a, b);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -130,6 +130,53 @@ struct SimulationConfig {
   int64_t settle_samples = 1000;
 };
 
+/// scenario.proto InstrumentLink: how a line-protocol instrument (SCPI-like text lines ending
+/// in "\n") is reached, over TCP or a serial port.
+struct InstrumentLinkConfig {
+  enum class Kind { kTcp, kSerial };
+  Kind kind = Kind::kTcp;
+  std::string host = "127.0.0.1";   ///< tcp: an IPv4 address (no name lookup)
+  int port = 0;                     ///< tcp: 1…65535
+  std::string path;                 ///< serial: the device (/dev/ttyUSB0, a pseudo-terminal)
+  int baud = 115200;                ///< serial
+  /// A reply later than this is a fault (the device is then held, reconnected, re-applied).
+  double response_timeout_s = 0.05;
+  /// Reconnection after a fault: first after reconnect_min_s, then doubling up to reconnect_max_s.
+  double reconnect_min_s = 0.05;
+  double reconnect_max_s = 2.0;
+};
+
+/// scenario.proto WaveplateDevice: an electronic polarization controller driven over a line
+/// protocol. Each control φ_i IS the voltage of one channel (the stage maps give retardance
+/// against volts), quantized to the device's DAC.
+struct WaveplateDeviceConfig {
+  InstrumentLinkConfig link;
+  /// The line that sets one channel: fmt syntax with {channel}, {volts} (e.g. {volts:.4f}) and
+  /// {code} (the DAC code).
+  std::string set_command = ":SOUR{channel}:VOLT {volts:.4f}";
+  std::vector<int> channels;        ///< per control; empty: 1, 2, …
+  std::string ack = "OK";           ///< the reply to every set; empty: no reply expected
+  /// The query that reads one channel's voltage back ({channel}): a driver that starts (or
+  /// reconnects after the device lost power) takes the waveplates where they are; empty: none.
+  std::string read_command = ":SOUR{channel}:VOLT?";
+  std::string identify = "*IDN?";   ///< sent on connecting, its reply logged; empty: none
+  double volts_min = -10.0;         ///< the DAC's full scale
+  double volts_max = 10.0;
+  int dac_bits = 16;                ///< 0: no quantization
+  double max_slew_v_per_s = 1e4;    ///< the device's own slew limit
+};
+
+/// scenario.proto PolarimeterDevice: a polarimeter queried over a line protocol once per
+/// sample; its reply holds S_out, S_in or both as comma-separated normalized Stokes values.
+struct PolarimeterDeviceConfig {
+  enum class Reply { kOutput, kInput, kInputAndOutput };
+  InstrumentLinkConfig link;
+  std::string query = ":MEAS:SOP?";
+  Reply reply = Reply::kOutput;
+  /// A reply whose |S| (the degree of polarization) is below this is refused: no direction.
+  double min_dop = 0.1;
+};
+
 /// scenario.proto Scenario.
 struct ScenarioConfig {
   std::string name = "paper";
@@ -139,6 +186,9 @@ struct ScenarioConfig {
   TargetConfig target;
   ControllerConfig controller;
   SimulationConfig simulation;
+  /// Real instruments (unset: the simulated device and bench).
+  std::optional<WaveplateDeviceConfig> waveplate_device;
+  std::optional<PolarimeterDeviceConfig> polarimeter_device;
 };
 
 /// The paper's section IV scenario with `axes` (e.g. "131", "3131"; see

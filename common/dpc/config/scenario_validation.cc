@@ -244,6 +244,8 @@ void ValidateScenario(const ScenarioConfig& scenario) {
   ValidateTarget(scenario.target);
   ValidateControllerConfig(scenario.controller, ScenarioControlCount(scenario.stages),
                            scenario.target, scenario.simulation);
+  if (scenario.waveplate_device) ValidateWaveplateDevice(*scenario.waveplate_device, scenario.stages);
+  if (scenario.polarimeter_device) ValidatePolarimeterDevice(*scenario.polarimeter_device);
   // A rule that spans parts: the range criterion needs a range to keep the controls in.
   if (scenario.controller.nullspace_criterion == NullspaceCriterion::kRange) {
     bool any_range = false;

@@ -93,6 +93,21 @@ void ValidateControllerConfig(const ControllerConfig& controller, int control_co
 /// angle of an adjustable-axis stage.
 int ScenarioControlCount(const std::vector<StageConfig>& stages);
 
+/// An instrument's command or reply line holds at most this many bytes.
+inline constexpr size_t kMaxInstrumentLineBytes = 200;
+
+/// The real instruments (instrument_validation.cc). A waveplate device: a reachable link (an
+/// IPv4 address and port, or an absolute serial path and a standard baud rate), timeouts and
+/// reconnection delays in range, a set command that formats with {channel}, {volts}, {code}
+/// into one line, one distinct channel per control, a DAC full scale, and a range inside that
+/// full scale for every control. A polarimeter device: a link, a query, min_dop in (0, 1].
+void ValidateWaveplateDevice(const WaveplateDeviceConfig& device, const std::vector<StageConfig>& stages);
+void ValidatePolarimeterDevice(const PolarimeterDeviceConfig& device);
+
+/// The line that sets `channel` to `volts` (DAC `code`) from a set_command template. Throws
+/// fmt::format_error for a template ValidateWaveplateDevice refuses.
+std::string FormatSetCommand(const std::string& set_command, int channel, double volts, int64_t code);
+
 /// The loop delay in samples, round(delay_s·sample_rate_hz). For a validated config; otherwise
 /// saturated to [0, INT64_MAX] (0 for NaN).
 int64_t DelaySamples(const SimulationConfig& simulation);

@@ -5,6 +5,7 @@
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 #include <google/protobuf/text_format.h>
 
+#include <algorithm>
 #include <optional>
 #include <utility>
 
@@ -308,6 +309,57 @@ SimulationConfig SimulationFromProto(const scenario::Simulation& p) {
   return s;
 }
 
+InstrumentLinkConfig LinkFromProto(const scenario::InstrumentLink& p) {
+  InstrumentLinkConfig link;
+  switch (p.kind_case()) {
+    case scenario::InstrumentLink::kTcp:
+      link.kind = InstrumentLinkConfig::Kind::kTcp;
+      if (!p.tcp().host().empty()) link.host = p.tcp().host();
+      link.port = static_cast<int>(std::min<uint32_t>(p.tcp().port(), 1u << 30));
+      break;
+    case scenario::InstrumentLink::kSerial:
+      link.kind = InstrumentLinkConfig::Kind::kSerial;
+      link.path = p.serial().path();
+      if (p.serial().has_baud()) link.baud = static_cast<int>(std::min<uint32_t>(p.serial().baud(), 1u << 30));
+      break;
+    case scenario::InstrumentLink::KIND_NOT_SET:
+      link.port = 0;  // validation names the missing link
+      break;
+  }
+  if (p.has_response_timeout_s()) link.response_timeout_s = p.response_timeout_s();
+  if (p.has_reconnect_min_s()) link.reconnect_min_s = p.reconnect_min_s();
+  if (p.has_reconnect_max_s()) link.reconnect_max_s = p.reconnect_max_s();
+  return link;
+}
+
+WaveplateDeviceConfig WaveplateDeviceFromProto(const scenario::WaveplateDevice& p) {
+  WaveplateDeviceConfig d;
+  d.link = LinkFromProto(p.link());
+  if (p.has_set_command()) d.set_command = p.set_command();
+  for (const uint32_t channel : p.channels()) d.channels.push_back(static_cast<int>(std::min<uint32_t>(channel, 1u << 30)));
+  if (p.has_ack()) d.ack = p.ack();
+  if (p.has_identify()) d.identify = p.identify();
+  if (p.has_volts_min()) d.volts_min = p.volts_min();
+  if (p.has_volts_max()) d.volts_max = p.volts_max();
+  if (p.has_dac_bits()) d.dac_bits = static_cast<int>(std::min<uint32_t>(p.dac_bits(), 1u << 30));
+  if (p.has_max_slew_v_per_s()) d.max_slew_v_per_s = p.max_slew_v_per_s();
+  if (p.has_read_command()) d.read_command = p.read_command();
+  return d;
+}
+
+PolarimeterDeviceConfig PolarimeterDeviceFromProto(const scenario::PolarimeterDevice& p) {
+  PolarimeterDeviceConfig d;
+  d.link = LinkFromProto(p.link());
+  if (p.has_query()) d.query = p.query();
+  switch (p.reply()) {
+    case scenario::PolarimeterDevice::S_IN: d.reply = PolarimeterDeviceConfig::Reply::kInput; break;
+    case scenario::PolarimeterDevice::S_IN_AND_S_OUT: d.reply = PolarimeterDeviceConfig::Reply::kInputAndOutput; break;
+    default: d.reply = PolarimeterDeviceConfig::Reply::kOutput; break;
+  }
+  if (p.has_min_dop()) d.min_dop = p.min_dop();
+  return d;
+}
+
 }  // namespace
 
 scenario::Scenario ParseScenarioText(std::string_view text, const std::string& source_name) {
@@ -361,6 +413,8 @@ ScenarioConfig ScenarioFromProto(const scenario::Scenario& proto) {
   }
   config.controller = ControllerFromProto(proto.controller());
   config.simulation = SimulationFromProto(proto.simulation());
+  if (proto.has_waveplate_device()) config.waveplate_device = WaveplateDeviceFromProto(proto.waveplate_device());
+  if (proto.has_polarimeter_device()) config.polarimeter_device = PolarimeterDeviceFromProto(proto.polarimeter_device());
   return config;
 }
 

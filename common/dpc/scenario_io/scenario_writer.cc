@@ -2,6 +2,7 @@
 
 #include <google/protobuf/text_format.h>
 
+#include <algorithm>
 #include <optional>
 
 namespace dpc {
@@ -187,6 +188,45 @@ void SimulationToProto(const SimulationConfig& s, scenario::Simulation* p) {
   p->set_settle_samples(s.settle_samples);
 }
 
+void LinkToProto(const InstrumentLinkConfig& link, scenario::InstrumentLink* p) {
+  if (link.kind == InstrumentLinkConfig::Kind::kTcp) {
+    p->mutable_tcp()->set_host(link.host);
+    p->mutable_tcp()->set_port(static_cast<uint32_t>(std::max(link.port, 0)));
+  } else {
+    p->mutable_serial()->set_path(link.path);
+    p->mutable_serial()->set_baud(static_cast<uint32_t>(std::max(link.baud, 0)));
+  }
+  p->set_response_timeout_s(link.response_timeout_s);
+  p->set_reconnect_min_s(link.reconnect_min_s);
+  p->set_reconnect_max_s(link.reconnect_max_s);
+}
+
+void WaveplateDeviceToProto(const WaveplateDeviceConfig& d, scenario::WaveplateDevice* p) {
+  LinkToProto(d.link, p->mutable_link());
+  p->set_set_command(d.set_command);
+  for (const int channel : d.channels) p->add_channels(static_cast<uint32_t>(std::max(channel, 0)));
+  p->set_ack(d.ack);
+  p->set_identify(d.identify);
+  p->set_volts_min(d.volts_min);
+  p->set_volts_max(d.volts_max);
+  p->set_dac_bits(static_cast<uint32_t>(std::max(d.dac_bits, 0)));
+  p->set_max_slew_v_per_s(d.max_slew_v_per_s);
+  p->set_read_command(d.read_command);
+}
+
+void PolarimeterDeviceToProto(const PolarimeterDeviceConfig& d, scenario::PolarimeterDevice* p) {
+  LinkToProto(d.link, p->mutable_link());
+  p->set_query(d.query);
+  switch (d.reply) {
+    case PolarimeterDeviceConfig::Reply::kOutput: p->set_reply(scenario::PolarimeterDevice::S_OUT); break;
+    case PolarimeterDeviceConfig::Reply::kInput: p->set_reply(scenario::PolarimeterDevice::S_IN); break;
+    case PolarimeterDeviceConfig::Reply::kInputAndOutput:
+      p->set_reply(scenario::PolarimeterDevice::S_IN_AND_S_OUT);
+      break;
+  }
+  p->set_min_dop(d.min_dop);
+}
+
 }  // namespace
 
 scenario::Scenario ScenarioToProto(const ScenarioConfig& config) {
@@ -207,6 +247,10 @@ scenario::Scenario ScenarioToProto(const ScenarioConfig& config) {
   }
   ControllerToProto(config.controller, proto.mutable_controller());
   SimulationToProto(config.simulation, proto.mutable_simulation());
+  if (config.waveplate_device) WaveplateDeviceToProto(*config.waveplate_device, proto.mutable_waveplate_device());
+  if (config.polarimeter_device) {
+    PolarimeterDeviceToProto(*config.polarimeter_device, proto.mutable_polarimeter_device());
+  }
   return proto;
 }
 

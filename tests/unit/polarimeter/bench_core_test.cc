@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -13,6 +15,7 @@
 #include "dpc/control/control_law_factory.h"
 #include "dpc/control/polarization_controller.h"
 #include "dpc/sim/closed_loop_simulator.h"
+#include "support/line_server.h"
 
 namespace dpc::services {
 namespace {
@@ -261,6 +264,48 @@ TEST(BenchCoreConstruction, AScenarioWithoutStagesThrowsScenarioError) {
   scenario.stages.clear();
   EXPECT_THROW((void)BenchCore(scenario, Lockstep()), ScenarioError);
   EXPECT_THROW((void)BenchCore(scenario, BenchSettings()), ScenarioError);
+}
+
+TEST_F(BenchCoreRealTime, ARealPolarimetersReadingsArePublishedWithTheMissingSopFromTheModel) {
+  // The instrument measures S_out only, and fails every fourth query with garbage.
+  std::atomic<int> queries{0};
+  dpc::testing::LineServer server([&](const std::string&) -> std::optional<std::string> {
+    return ++queries % 4 == 0 ? std::string("#?\n") : std::string("0.000000,0.600000,0.800000\n");
+  });
+  PolarimeterDeviceConfig device;
+  device.link.port = server.port();
+  InstrumentPolarimeter polarimeter(device);
+  BenchSettings settings = Settings(0.1);
+  settings.settle_s = 0.0;  // statistics from the first lock on
+  BenchCore bench(Scenario(), settings);
+  RecordingLink link;
+  std::vector<std::string> failures;
+  const BenchReport report =
+      bench.RunInstrument(&link, &polarimeter, nullptr, [&](const std::string& why) { failures.push_back(why); });
+  EXPECT_EQ(report.stop_reason, "end of --run-s");
+  EXPECT_GE(report.samples, 20);  // 100 at 1 kHz on an idle machine; fewer when it is loaded (overruns)
+  EXPECT_EQ(report.published + report.failed_readings, report.samples);
+  EXPECT_GE(report.failed_readings, report.samples / 4 - 1);
+  ASSERT_EQ(failures.size(), static_cast<size_t>(report.failed_readings));
+  EXPECT_TRUE(std::any_of(failures.begin(), failures.end(),
+                          [](const std::string& why) { return why.find("not a number") != std::string::npos; }))
+      << failures.front();
+  ASSERT_EQ(link.published.size(), static_cast<size_t>(report.published));
+  const WaveplateChain& chain = bench.chain();
+  ChainPose pose;
+  chain.ComputePose(BuildInitialPhi(bench.scenario().controller, bench.control_count()), &pose);
+  int64_t previous_ns = -1;
+  for (size_t k = 0; k < link.published.size(); ++k) {
+    const BenchSample& sample = link.published[k];
+    EXPECT_EQ(sample.sequence, k + 1);  // consecutive: a failed period publishes nothing
+    EXPECT_GT(sample.time_ns, previous_ns);  // the reply's time
+    previous_ns = sample.time_ns;
+    EXPECT_TRUE(sample.s_out.isApprox(StokesVector(0, 0.6, 0.8)));
+    // S_in from the model: the chain at the applied φ maps it onto the measured S_out.
+    EXPECT_LT((chain.Output(pose, sample.s_in) - sample.s_out).norm(), 1e-9);
+  }
+  // The target is the measured output: the error is 0.
+  EXPECT_NEAR(report.result.summary.error_deg.max, 0.0, 1e-3);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "support/scenario_texts.h"
 
@@ -28,6 +29,21 @@ TEST(ScenarioWriterTest, EveryFieldRoundTrips) {
     ExpectSameScenario(ScenarioFromProto(ScenarioToProto(config)), config);
     ExpectSameScenario(FromText(ScenarioToText(config)), config);
   }
+}
+
+TEST(ScenarioWriterTest, InstrumentsRoundTrip) {
+  const ScenarioConfig config = FromText(kInstrumentsText);
+  ASSERT_TRUE(config.waveplate_device.has_value());
+  EXPECT_EQ(config.waveplate_device->link.kind, InstrumentLinkConfig::Kind::kSerial);
+  EXPECT_EQ(config.waveplate_device->link.baud, 57600);
+  EXPECT_EQ(config.waveplate_device->channels, (std::vector<int>{4, 2, 7}));
+  ASSERT_TRUE(config.polarimeter_device.has_value());
+  EXPECT_EQ(config.polarimeter_device->reply, PolarimeterDeviceConfig::Reply::kInputAndOutput);
+  EXPECT_EQ(config.polarimeter_device->link.port, 5025);
+  EXPECT_EQ(config.polarimeter_device->link.reconnect_max_s, 2.0);  // the default
+  ExpectSameScenario(FromText(ScenarioToText(config)), config);
+  // Without them, none appear.
+  EXPECT_EQ(ScenarioToText(PaperScenario("131")).find("device"), std::string::npos);
 }
 
 TEST(ScenarioWriterTest, DoublesRoundTripExactly) {

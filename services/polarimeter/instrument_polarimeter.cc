@@ -1,0 +1,70 @@
+#include "instrument_polarimeter.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "dpc/bench/clock.h"
+
+namespace dpc::services {
+
+InstrumentPolarimeter::InstrumentPolarimeter(PolarimeterDeviceConfig device)
+    : device_(std::move(device)), link_(device_.link), backoff_s_(device_.link.reconnect_min_s) {}
+
+std::string InstrumentPolarimeter::name() const { return "polarimeter (" + link_.Describe() + ")"; }
+
+std::optional<PolarimeterReading> InstrumentPolarimeter::Measure(int64_t now_ns, std::string* why) {
+  const double timeout_s = device_.link.response_timeout_s;
+  if (!link_.is_open()) {
+    if (now_ns < next_connect_ns_) {
+      *why = fmt::format("not connected (next attempt in {:.2f} s)", static_cast<double>(next_connect_ns_ - now_ns) * 1e-9);
+      return std::nullopt;
+    }
+    if (std::string failure = link_.Open(timeout_s * 4 + 0.1); !failure.empty()) {
+      ++counters_.failed_connects;
+      next_connect_ns_ = now_ns + static_cast<int64_t>(backoff_s_ * 1e9);
+      backoff_s_ = std::min(backoff_s_ * 2, device_.link.reconnect_max_s);
+      *why = "cannot connect: " + failure;
+      return std::nullopt;
+    }
+    ++counters_.connects;
+    backoff_s_ = device_.link.reconnect_min_s;
+  }
+  ++counters_.queries;
+  std::string failure;
+  const auto reply = link_.Query(device_.query, timeout_s, &failure);
+  const int64_t reply_ns = MonotonicNs();
+  if (!reply) {
+    if (!link_.is_open()) {
+      next_connect_ns_ = reply_ns + static_cast<int64_t>(backoff_s_ * 1e9);
+    } else {
+      ++counters_.timeouts;
+    }
+    *why = fmt::format("{}: {}", device_.query, failure);
+    return std::nullopt;
+  }
+  using Reply = PolarimeterDeviceConfig::Reply;
+  StokesVector values[2];
+  const int vectors = device_.reply == Reply::kInputAndOutput ? 2 : 1;
+  if (std::string bad = instrument::ParseStokesReply(*reply, vectors, device_.min_dop, values); !bad.empty()) {
+    ++counters_.refused_replies;
+    *why = fmt::format("{}: {}", device_.query, bad);
+    return std::nullopt;
+  }
+  PolarimeterReading reading;
+  reading.reply_ns = reply_ns;
+  switch (device_.reply) {
+    case Reply::kOutput: reading.s_out = values[0]; break;
+    case Reply::kInput: reading.s_in = values[0]; break;
+    case Reply::kInputAndOutput:
+      reading.s_in = values[0];
+      reading.s_out = values[1];
+      break;
+  }
+  ++counters_.readings;
+  return reading;
+}
+
+}  // namespace dpc::services
