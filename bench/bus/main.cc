@@ -32,6 +32,9 @@
 //   record   dpc record of a real-time bench at 2 and 10 kHz: the recorder's CPU (% of one
 //            core), the samples it kept and those missing between them (the polarimeter's
 //            sequence numbers), messages dropped, file size
+//   instruments  the bench through dpc-emulator (TCP, pseudo-terminals) beside the simulated one at
+//            0.5-5 kHz: rate achieved, loop latency, query → reply and command → acknowledged
+//            times, periods without a reading, the highest rate each path sustains
 //   memory   RSS of each service at the start and the end of a long 10 kHz run
 //   security the same bench open and with DDS Security (a PKI from make-bench-pki.sh) at 2,
 //            10 and 20 kHz, alternating: loop latency p50/p99, CPU of the three services per
@@ -65,7 +68,7 @@ int main(int argc, char** argv) {
   app.add_option("--raw-owner", raw_owner, "(internal) a raw EXCLUSIVE writer of this strength");
   int domain = 30;
   app.add_option("--domain", domain, "DDS domain (loopback profile)")->check(CLI::Range(0, 232));
-  app.add_option("--only", only, "One section: raw,loop,rate,failover,tracking,record,memory,security");
+  app.add_option("--only", only, "One section: raw,loop,rate,failover,tracking,record,instruments,memory,security");
   CLI11_PARSE(app, argc, argv);
 
   // The internal modes: the far sides of the raw references, started by the sections.
@@ -102,6 +105,10 @@ int main(int argc, char** argv) {
   }
   if (want("record")) {
     bench::RunRecordSection(harness);
+    std::fflush(stdout);
+  }
+  if (want("instruments")) {
+    bench::RunInstrumentsSection(harness);
     std::fflush(stdout);
   }
   if (want("memory")) bench::RunMemorySection(harness);

@@ -28,6 +28,10 @@ void RunSecuritySection(const BusBenchmarkHarness& harness);
 /// record: `dpc record` of a real-time bench at 2 and 10 kHz: the recorder's CPU, samples kept
 /// and missing (record_section.cc).
 void RunRecordSection(const BusBenchmarkHarness& harness);
+/// instruments: the bench through dpc-emulator over TCP and pseudo-terminals beside the
+/// simulated bench: rate, loop latency, query and set+ack times, the highest sustained rate
+/// (instruments_section.cc).
+void RunInstrumentsSection(const BusBenchmarkHarness& harness);
 /// memory: RSS of each service at the start and the end of a long 10 kHz run
 /// (memory_section.cc).
 void RunMemorySection(const BusBenchmarkHarness& harness);

@@ -140,6 +140,11 @@ void LineWaveplates::CountMissingReply() {
   ++counters_.timeouts;
 }
 
+std::pair<double, double> LineWaveplates::ApplyTimesUs() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return {apply_times_.Percentile(0.5), apply_times_.Percentile(0.99)};
+}
+
 void LineWaveplates::SetFault(std::string why) {
   bool changed = false;
   {
@@ -271,7 +276,13 @@ void LineWaveplates::Run() {
     lock.unlock();
     std::string failure;
     if (!idle) {
+      const auto sent_at = Clock::now();
       failure = Send(target, false);
+      if (failure.empty()) {
+        const double us = std::chrono::duration<double, std::micro>(Clock::now() - sent_at).count();
+        std::lock_guard<std::mutex> guard(mutex_);
+        apply_times_.Add(us);
+      }
     } else {
       // Idle: is the device still there, and does it still hold what it was set to?
       if (!device_.read_command.empty()) {

@@ -63,6 +63,8 @@ class LineWaveplates final : public WaveplateBackend {
   std::string fault() const override;
 
   Counters counters() const;
+  /// A command handed over → every changed channel acknowledged, µs: p50 and p99 of the latest.
+  std::pair<double, double> ApplyTimesUs() const;
   /// Whether the φ the driver started from was read back from the device.
   bool started_from_read_back() const { return started_from_read_back_; }
 
@@ -94,6 +96,7 @@ class LineWaveplates final : public WaveplateBackend {
   uint64_t wanted_version_ = 0;               ///< counts Apply()s (guarded)
   std::string fault_;                          ///< guarded
   Counters counters_;                          ///< guarded
+  instrument::ExchangeTimes apply_times_;      ///< guarded
   bool stop_ = false;                          ///< guarded
 
   std::vector<instrument::DacPoint> device_codes_;  ///< the I/O thread's: what the device acknowledged

@@ -152,6 +152,13 @@ class DriverService final : public Service {
       }
       if (WaitForStopUntil(std::chrono::steady_clock::time_point(std::chrono::nanoseconds(due_ns)))) break;
     }
+    if (const auto* line = dynamic_cast<const LineWaveplates*>(backend_.get())) {
+      const LineWaveplates::Counters c = line->counters();
+      const auto [p50_us, p99_us] = line->ApplyTimesUs();
+      spdlog::info("{}: {} set lines, {} refused replies, {} timeouts, {} connections ({} failed); a command "
+                   "acknowledged after p50 {:.0f} µs, p99 {:.0f} µs",
+                   line->name(), c.sets, c.refused_replies, c.timeouts, c.connects, c.failed_connects, p50_us, p99_us);
+    }
     if (displaced_.load()) {
       spdlog::error("another driver drives bench {}: this one (started later) leaves the waveplates to it",
                     bench_id_);

@@ -34,8 +34,10 @@ std::optional<PolarimeterReading> InstrumentPolarimeter::Measure(int64_t now_ns,
   }
   ++counters_.queries;
   std::string failure;
+  const int64_t query_ns = MonotonicNs();
   const auto reply = link_.Query(device_.query, timeout_s, &failure);
   const int64_t reply_ns = MonotonicNs();
+  if (reply) query_times_.Add(static_cast<double>(reply_ns - query_ns) * 1e-3);
   if (!reply) {
     if (!link_.is_open()) {
       next_connect_ns_ = reply_ns + static_cast<int64_t>(backoff_s_ * 1e9);

@@ -40,6 +40,8 @@ class InstrumentPolarimeter {
   std::optional<PolarimeterReading> Measure(int64_t now_ns, std::string* why);
 
   const Counters& counters() const { return counters_; }
+  /// Query → reply, µs, of the latest queries answered.
+  const instrument::ExchangeTimes& query_times() const { return query_times_; }
   std::string name() const;
   const PolarimeterDeviceConfig& device() const { return device_; }
 
@@ -47,6 +49,7 @@ class InstrumentPolarimeter {
   PolarimeterDeviceConfig device_;
   instrument::LineLink link_;
   Counters counters_;
+  instrument::ExchangeTimes query_times_;
   int64_t next_connect_ns_ = 0;
   double backoff_s_;
 };

@@ -211,7 +211,10 @@ class PolarimeterService final : public Service {
         out["instrument"] = {{"name", instrument_->name()},         {"queries", c.queries},
                              {"readings", c.readings},              {"timeouts", c.timeouts},
                              {"refused_replies", c.refused_replies}, {"connects", c.connects},
-                             {"failed_connects", c.failed_connects}, {"failed_periods", report.failed_readings}};
+                             {"failed_connects", c.failed_connects}, {"failed_periods", report.failed_readings},
+                             {"query_round_trip_us",
+                              {{"p50", instrument_->query_times().Percentile(0.5)},
+                               {"p99", instrument_->query_times().Percentile(0.99)}}}};
       }
       std::cout << out.dump() << std::endl;
     }

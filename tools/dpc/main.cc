@@ -7,6 +7,7 @@
 //   dpc record -o FILE.mcap        a bench's topics into an MCAP file
 //   dpc replay FILE.mcap           a recording re-published with its timing
 //   dpc evaluate FILE.mcap --controller CMD   controllers judged on a recorded session
+//   dpc calibrate SCENARIO -o OUT    a real EPC's control maps measured with the real polarimeter
 //   dpc topic list|echo|hz         the bench's DDS topics (discovery, samples, rates)
 //   dpc target --point S1 S2 S3    change a running bench's target (or --set-normal, --linear)
 //   dpc monitor                    a running bench's live status on one line
@@ -18,6 +19,7 @@
 #include "dpc/cli/command_line.h"
 #include "dpc/cli/exit_code.h"
 #include "dashboard_command.h"
+#include "calibrate_command.h"
 #include "evaluate_command.h"
 #include "info_command.h"
 #include "monitor_command.h"
@@ -50,6 +52,8 @@ int main(int argc, char** argv) {
   CLI::App* replay = AddReplayCommand(app, &replay_options);
   EvaluateOptions evaluate_options;
   CLI::App* evaluate = AddEvaluateCommand(app, &evaluate_options);
+  CalibrateOptions calibrate_options;
+  CLI::App* calibrate = AddCalibrateCommand(app, &calibrate_options);
   TopicOptions topic_options;
   CLI::App* topic = AddTopicCommand(app, &topic_options);
   TargetOptions target_options;
@@ -78,6 +82,7 @@ int main(int argc, char** argv) {
   if (*record) return ToInt(RunRecordCommand(record_options));
   if (*replay) return ToInt(RunReplayCommand(replay_options));
   if (*evaluate) return ToInt(RunEvaluateCommand(evaluate_options));
+  if (*calibrate) return ToInt(RunCalibrateCommand(calibrate_options));
   if (*topic) return ToInt(RunTopicCommand(topic_options));
   if (*target) return ToInt(RunTargetCommand(target_options));
   if (*monitor) return ToInt(RunMonitorCommand(monitor_options));

@@ -287,6 +287,24 @@ std::string ParseStokesReply(const std::string& reply, int vectors, double min_d
   return {};
 }
 
+void ExchangeTimes::Add(double us) {
+  if (window_.size() < kCapacity) {
+    window_.push_back(us);
+  } else {
+    window_[next_] = us;
+  }
+  next_ = (next_ + 1) % kCapacity;
+  ++count_;
+}
+
+double ExchangeTimes::Percentile(double q) const {
+  if (window_.empty()) return NAN;
+  std::vector<double> sorted = window_;
+  const size_t rank = std::min(sorted.size() - 1, static_cast<size_t>(q * static_cast<double>(sorted.size())));
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(rank), sorted.end());
+  return sorted[rank];
+}
+
 DacPoint Quantize(double volts, double volts_min, double volts_max, int bits) {
   const double clamped = std::clamp(volts, volts_min, volts_max);
   if (bits <= 0) return {0, clamped};

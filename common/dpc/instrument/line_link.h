@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "dpc/config/scenario_config.h"
 
@@ -57,6 +58,22 @@ class LineLink {
   int fd_ = -1;
   std::string buffer_;  ///< received, not yet returned
   bool discarding_line_ = false;  ///< dropping the rest of an over-long line
+};
+
+/// The durations of the latest exchanges with an instrument (a query and its reply, a set and
+/// its acknowledgement), for their percentiles: a fixed window of the last kCapacity, so it never
+/// grows. Not thread-safe.
+class ExchangeTimes {
+ public:
+  static constexpr size_t kCapacity = 4096;
+  void Add(double us);
+  size_t count() const { return count_; }
+  /// The q-quantile (0…1) of the window, nearest rank; NaN when empty.
+  double Percentile(double q) const;
+
+ private:
+  std::vector<double> window_;
+  size_t next_ = 0, count_ = 0;
 };
 
 /// The Stokes vectors in a reply "s1,s2,s3[,s1,s2,s3]" (commas, optional spaces): exactly

@@ -94,7 +94,7 @@ WaveplateDeviceConfig Device(int port) {
   WaveplateDeviceConfig d;
   d.link.kind = InstrumentLinkConfig::Kind::kTcp;
   d.link.port = port;
-  d.link.response_timeout_s = 0.05;
+  d.link.response_timeout_s = 0.5;  // generous: a loaded test machine must not look like a fault
   d.link.reconnect_min_s = 0.02;
   d.link.reconnect_max_s = 0.1;
   d.dac_bits = 12;  // 20 V / 4095: 4.9 mV steps

@@ -22,7 +22,7 @@ using namespace std::chrono_literals;
 PolarimeterDeviceConfig Device(int port, PolarimeterDeviceConfig::Reply reply = PolarimeterDeviceConfig::Reply::kOutput) {
   PolarimeterDeviceConfig d;
   d.link.port = port;
-  d.link.response_timeout_s = 0.05;
+  d.link.response_timeout_s = 0.3;  // generous: a loaded test machine must not look like a fault
   d.link.reconnect_min_s = 0.05;
   d.link.reconnect_max_s = 0.2;
   d.reply = reply;
@@ -74,7 +74,7 @@ TEST(InstrumentPolarimeterTest, GarbageAndSilenceGiveNoReadingAndSayWhy) {
   mode = 1;
   const auto started = std::chrono::steady_clock::now();
   EXPECT_FALSE(polarimeter.Measure(MonotonicNs(), &why).has_value());
-  EXPECT_LT(std::chrono::steady_clock::now() - started, 500ms);
+  EXPECT_LT(std::chrono::steady_clock::now() - started, 1500ms);  // the timeout, not more
   EXPECT_NE(why.find("no reply"), std::string::npos) << why;
   EXPECT_EQ(polarimeter.counters().timeouts, 1u);
   mode = 2;
