@@ -10,7 +10,8 @@
 #   --runs N         fuzz each target for N inputs (the benchmark: --runs 1000000)
 #   --build-dir DIR  the fuzz build (default: build-fuzz; never the main build)
 #   --targets "…"    only these (names without fuzz_: read_sample read_command read_state read_summary read_status
-#                    read_device read_target target_request read_mcap scenario)
+#                    read_device read_target target_request read_mcap scenario instrument_reply
+#                    emulator_protocol)
 #   --jobs N         build jobs (default: 1)
 #
 # A crash stops its target; the input is kept in DIR/tests/fuzz/artifacts/<target>/crash-* and
@@ -25,7 +26,7 @@ mode=seconds
 amount=60
 build_dir=build-fuzz
 jobs=1
-targets="read_sample read_command read_state read_device read_target target_request read_summary read_status read_mcap scenario"
+targets="read_sample read_command read_state read_device read_target target_request read_summary read_status read_mcap scenario instrument_reply emulator_protocol"
 usage() { sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//' >&2; exit "${1:-2}"; }
 while (($#)); do
   case $1 in

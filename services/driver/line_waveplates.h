@@ -6,7 +6,8 @@
 // The driver never waits for the device. Apply() hands the newest motion to an I/O thread and
 // returns at once; the thread writes one set line per channel whose DAC code changed (all
 // lines first, then their acknowledgements: one round trip per command) and always sends the
-// newest motion (commands that arrive faster than the device answers are coalesced). The device
+// newest motion (commands that arrive faster than the device answers, or within its settling_s
+// of the last set, are coalesced). The device
 // cannot ramp: a motion is applied as its point (Applied() has no rate).
 //
 // Faults: a refused connection, a reply later than response_timeout_s, a closed connection, a

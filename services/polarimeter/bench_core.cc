@@ -276,7 +276,9 @@ BenchReport BenchCore::RunInstrument(BenchLink* link, InstrumentPolarimeter* pol
       observer->OnSample(SampleView{static_cast<int64_t>(sequence), t_s, s_in, s_out, pose.phi,
                                     target->DistanceRad(s_out) * kRadToDeg});
     }
-    link->Publish(MakeSample(++sequence, t_ns, s_in, s_out));
+    BenchSample sample = MakeSample(++sequence, t_ns, s_in, s_out);
+    sample.optical_power_w = reading->power_w;
+    link->Publish(sample);
     ++report.published;
   }
   const double wall_s = static_cast<double>(MonotonicNs() - start_ns) * 1e-9;

@@ -50,13 +50,31 @@ std::optional<PolarimeterReading> InstrumentPolarimeter::Measure(int64_t now_ns,
   using Reply = PolarimeterDeviceConfig::Reply;
   StokesVector values[2];
   const int vectors = device_.reply == Reply::kInputAndOutput ? 2 : 1;
-  if (std::string bad = instrument::ParseStokesReply(*reply, vectors, device_.min_dop, values); !bad.empty()) {
+  std::string stokes = *reply;
+  std::optional<double> power_w;
+  if (device_.reports_power) {
+    // The last field is the optical power.
+    const size_t comma = stokes.rfind(',');
+    double power = 0.0;
+    std::string bad = comma == std::string::npos ? "no power field"
+                                                 : instrument::ParseNumberReply(stokes.substr(comma + 1), &power);
+    if (bad.empty() && !(power >= 0.0)) bad = fmt::format("a power of {} W", power);
+    if (!bad.empty()) {
+      ++counters_.refused_replies;
+      *why = fmt::format("{}: the power: {}", device_.query, bad);
+      return std::nullopt;
+    }
+    power_w = power;
+    stokes.resize(comma);
+  }
+  if (std::string bad = instrument::ParseStokesReply(stokes, vectors, device_.min_dop, values); !bad.empty()) {
     ++counters_.refused_replies;
     *why = fmt::format("{}: {}", device_.query, bad);
     return std::nullopt;
   }
   PolarimeterReading reading;
   reading.reply_ns = reply_ns;
+  reading.power_w = power_w;
   switch (device_.reply) {
     case Reply::kOutput: reading.s_out = values[0]; break;
     case Reply::kInput: reading.s_in = values[0]; break;

@@ -20,6 +20,7 @@ namespace dpc::services {
 struct PolarimeterReading {
   std::optional<StokesVector> s_in;   ///< unit, when the instrument measures it
   std::optional<StokesVector> s_out;
+  std::optional<double> power_w;      ///< finite, ≥ 0, when the instrument reports it
   int64_t reply_ns = 0;               ///< monotonic: when the reply arrived
 };
 

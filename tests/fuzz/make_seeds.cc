@@ -308,6 +308,23 @@ void McapFiles() {
   }
 }
 
+/// Lines as the instruments and their clients write them: replies for instrument_reply (the
+/// first byte picks one SOP or two and the lowest degree of polarization), protocol lines for
+/// emulator_protocol (the first byte picks the EPC, the polarimeter or the control port).
+void InstrumentTexts() {
+  const auto write = [](const std::string& target, const std::string& name, const std::string& bytes) {
+    fs::create_directories(root / target);
+    std::ofstream(root / target / name, std::ios::binary) << bytes;
+  };
+  write("instrument_reply", "sop", std::string(1, '\x00') + "0.000000,0.600000,0.800000");
+  write("instrument_reply", "both", std::string(1, '\x01') + "1,0,0, 0,0,-0.5");
+  write("instrument_reply", "volts", std::string(1, '\x00') + "1.250000");
+  write("emulator_protocol", "epc", std::string(1, '\x00') + "*IDN?\n:SOUR1:VOLT 1.5\n:SOUR2:VOLT?\n");
+  write("emulator_protocol", "polarimeter", std::string(1, '\x01') + ":MEAS:SOP?\r\n:MEAS:BOTH?\n:MEAS:SIN?\n");
+  write("emulator_protocol", "control",
+        std::string(1, '\x02') + "garbage epc 2\nslow polarimeter 0.1 3\ntemperature 40\npowercycle 0.2\nstatus\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -326,6 +343,7 @@ int main(int argc, char** argv) {
     Summaries();
     Statuses();
     McapFiles();
+    InstrumentTexts();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "dpc_fuzz_seeds: %s\n", e.what());
     return 1;

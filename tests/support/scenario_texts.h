@@ -184,12 +184,14 @@ waveplate_device {
   volts_max: 9.5
   dac_bits: 14
   max_slew_v_per_s: 500
+  settling_s: 0.002
 }
 polarimeter_device {
   link { tcp { host: "127.0.0.1" port: 5025 } response_timeout_s: 0.01 }
   query: "READ:BOTH?"
   reply: S_IN_AND_S_OUT
   min_dop: 0.3
+  reports_power: true
 }
 )pb";
 
@@ -218,6 +220,7 @@ inline void ExpectSameInstruments(const ScenarioConfig& a, const ScenarioConfig&
     EXPECT_EQ(x.volts_max, y.volts_max);
     EXPECT_EQ(x.dac_bits, y.dac_bits);
     EXPECT_EQ(x.max_slew_v_per_s, y.max_slew_v_per_s);
+    EXPECT_EQ(x.settling_s, y.settling_s);
   }
   ASSERT_EQ(a.polarimeter_device.has_value(), b.polarimeter_device.has_value());
   if (a.polarimeter_device) {
@@ -226,6 +229,7 @@ inline void ExpectSameInstruments(const ScenarioConfig& a, const ScenarioConfig&
     EXPECT_EQ(x.query, y.query);
     EXPECT_EQ(x.reply, y.reply);
     EXPECT_EQ(x.min_dop, y.min_dop);
+    EXPECT_EQ(x.reports_power, y.reports_power);
   }
 }
 

@@ -154,6 +154,8 @@ cli::ExitCode RunCalibrateCommand(const CalibrateOptions& o) {
   std::vector<double> reference(static_cast<size_t>(stages));
   for (int i = 0; i < stages; ++i) reference[static_cast<size_t>(i)] = scenario.stages[static_cast<size_t>(i)].range->Clamp(o.reference_v);
 
+  // The device's own settling time is the least to wait after a set.
+  const double settle_s = std::max(o.settle_s, scenario.waveplate_device->settling_s);
   StopSignals signals;
   Instruments instruments(scenario);
   const bool on_terminal = isatty(STDERR_FILENO) == 1;
@@ -191,7 +193,7 @@ cli::ExitCode RunCalibrateCommand(const CalibrateOptions& o) {
   try {
     instruments.Open();
     for (int i = 0; i < stages; ++i) reference[static_cast<size_t>(i)] = instruments.Set(i, reference[static_cast<size_t>(i)]);
-    std::this_thread::sleep_for(std::chrono::duration<double>(o.settle_s));
+    std::this_thread::sleep_for(std::chrono::duration<double>(settle_s));
     at_reference = measure();
     for (int i = 0; i < stages; ++i) {
       const ControlRange& range = *scenario.stages[static_cast<size_t>(i)].range;
@@ -199,7 +201,7 @@ cli::ExitCode RunCalibrateCommand(const CalibrateOptions& o) {
       for (int k = 0; k < o.points; ++k) {
         const double wanted = range.min + (range.max - range.min) * k / (o.points - 1);
         sweep.volts.push_back(instruments.Set(i, wanted));
-        std::this_thread::sleep_for(std::chrono::duration<double>(o.settle_s));
+        std::this_thread::sleep_for(std::chrono::duration<double>(settle_s));
         sweep.rotations.push_back(measure());
         status(fmt::format("dpc calibrate: stage {} of {} ({}), {} of {} voltages", i + 1, stages,
                            scenario.stages[static_cast<size_t>(i)].name, k + 1, o.points));

@@ -144,6 +144,8 @@ void ValidateWaveplateDevice(const WaveplateDeviceConfig& device, const std::vec
   }
   if (device.dac_bits < 0 || device.dac_bits > 32) Fail(path + ".dac_bits", "0 (no quantization) to 32 bits");
   RequirePositive(device.max_slew_v_per_s, path + ".max_slew_v_per_s", "the device's slew limit must be > 0");
+  field_checks::RequireNonNegative(device.settling_s, path + ".settling_s", "a settling time must be >= 0");
+  if (device.settling_s > 10.0) Fail(path + ".settling_s", fmt::format("{} s: at most 10 s", device.settling_s));
   // No command may reach the device outside its full scale: every control needs a range
   // inside it (the calibrated range), which the driver clamps to.
   std::vector<std::pair<std::string, const std::optional<ControlRange>*>> ranges;

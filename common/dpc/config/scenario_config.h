@@ -164,6 +164,9 @@ struct WaveplateDeviceConfig {
   double volts_max = 10.0;
   int dac_bits = 16;                ///< 0: no quantization
   double max_slew_v_per_s = 1e4;    ///< the device's own slew limit
+  /// After a set the device's output takes this long to settle: it is not set again before
+  /// (newer commands are coalesced meanwhile), and dpc calibrate waits at least this long.
+  double settling_s = 0.0;
 };
 
 /// scenario.proto PolarimeterDevice: a polarimeter queried over a line protocol once per
@@ -175,6 +178,8 @@ struct PolarimeterDeviceConfig {
   Reply reply = Reply::kOutput;
   /// A reply whose |S| (the degree of polarization) is below this is refused: no direction.
   double min_dop = 0.1;
+  /// The reply ends with one more field: the optical power in watts (published with the sample).
+  bool reports_power = false;
 };
 
 /// scenario.proto Scenario.

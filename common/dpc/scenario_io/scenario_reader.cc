@@ -344,6 +344,7 @@ WaveplateDeviceConfig WaveplateDeviceFromProto(const scenario::WaveplateDevice& 
   if (p.has_dac_bits()) d.dac_bits = static_cast<int>(std::min<uint32_t>(p.dac_bits(), 1u << 30));
   if (p.has_max_slew_v_per_s()) d.max_slew_v_per_s = p.max_slew_v_per_s();
   if (p.has_read_command()) d.read_command = p.read_command();
+  d.settling_s = p.settling_s();
   return d;
 }
 
@@ -357,6 +358,7 @@ PolarimeterDeviceConfig PolarimeterDeviceFromProto(const scenario::PolarimeterDe
     default: d.reply = PolarimeterDeviceConfig::Reply::kOutput; break;
   }
   if (p.has_min_dop()) d.min_dop = p.min_dop();
+  d.reports_power = p.reports_power();
   return d;
 }
 

@@ -212,6 +212,7 @@ void WaveplateDeviceToProto(const WaveplateDeviceConfig& d, scenario::WaveplateD
   p->set_dac_bits(static_cast<uint32_t>(std::max(d.dac_bits, 0)));
   p->set_max_slew_v_per_s(d.max_slew_v_per_s);
   p->set_read_command(d.read_command);
+  p->set_settling_s(d.settling_s);
 }
 
 void PolarimeterDeviceToProto(const PolarimeterDeviceConfig& d, scenario::PolarimeterDevice* p) {
@@ -225,6 +226,7 @@ void PolarimeterDeviceToProto(const PolarimeterDeviceConfig& d, scenario::Polari
       break;
   }
   p->set_min_dop(d.min_dop);
+  p->set_reports_power(d.reports_power);
 }
 
 }  // namespace

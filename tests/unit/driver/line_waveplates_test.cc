@@ -196,6 +196,22 @@ TEST(LineWaveplatesTest, AnIdleDeviceThatForgotItsVoltagesIsNoticedAndSetAgain) 
   EXPECT_GE(waveplates.counters().connects, 2u);
 }
 
+TEST(LineWaveplatesTest, ADeviceThatSettlesIsNotSetAgainBeforeAndGetsTheNewestCommand) {
+  FakeDevice device;
+  WaveplateDeviceConfig config = Device(device.port());
+  config.settling_s = 0.3;
+  LineWaveplates waveplates(config, ControlVector::Zero(3), Ranges(), nullptr);
+  const int before = device.sets();
+  for (int k = 1; k <= 20; ++k) {
+    ASSERT_EQ(waveplates.Apply(Point({0.1 * k, 0.0, 0.0})), "");
+    std::this_thread::sleep_for(10ms);
+  }
+  // 20 commands in ~0.2 s: the first set, then (after 0.3 s) only the newest.
+  ASSERT_TRUE(Eventually([&] { return std::abs(device.volts(1) - waveplates.Applied().phi[0]) < 1e-4; }));
+  EXPECT_LE(device.sets() - before, 3);
+  EXPECT_NEAR(device.volts(1), 2.0, 0.01);
+}
+
 TEST(LineWaveplatesTest, NoDeviceAtStartIsAFaultFromTheScenariosPhiOn) {
   int port = 0;
   { FakeDevice gone; port = gone.port(); }

@@ -59,6 +59,24 @@ TEST(InstrumentPolarimeterTest, BothVectorsInOneReply) {
   EXPECT_TRUE(reading->s_out->isApprox(-StokesVector::UnitZ()));
 }
 
+TEST(InstrumentPolarimeterTest, TheOpticalPowerAtTheEndOfAReplyIsReadToo) {
+  std::atomic<int> calls{0};
+  dpc::testing::LineServer server([&](const std::string&) -> std::optional<std::string> {
+    return ++calls == 1 ? "0,0.6,0.8,1.25e-3\n" : "0,0.6,0.8,-1\n";
+  });
+  PolarimeterDeviceConfig device = Device(server.port());
+  device.reports_power = true;
+  InstrumentPolarimeter polarimeter(device);
+  std::string why;
+  const auto reading = polarimeter.Measure(MonotonicNs(), &why);
+  ASSERT_TRUE(reading.has_value()) << why;
+  ASSERT_TRUE(reading->power_w.has_value());
+  EXPECT_DOUBLE_EQ(*reading->power_w, 1.25e-3);
+  EXPECT_TRUE(reading->s_out->isApprox(StokesVector(0, 0.6, 0.8)));
+  EXPECT_FALSE(polarimeter.Measure(MonotonicNs(), &why).has_value());  // a negative power
+  EXPECT_NE(why.find("power"), std::string::npos) << why;
+}
+
 TEST(InstrumentPolarimeterTest, GarbageAndSilenceGiveNoReadingAndSayWhy) {
   std::atomic<int> mode{0};
   dpc::testing::LineServer server([&](const std::string&) -> std::optional<std::string> {

@@ -28,7 +28,7 @@ _dpc() {
     return
   fi
   case $prev in
-    --plot | --trace | --csv | --json-out | -o | --output | --assets | --security-dir)
+    --plot | --trace | --csv | --json-out | -o | --output | --assets | --security-dir | --logs)
       mapfile -t COMPREPLY < <(compgen -f -- "$cur")
       return ;;
     --scenario)
@@ -63,7 +63,8 @@ _dpc() {
   case $command in
     sim | sweep) mapfile -t COMPREPLY < <(compgen -f -X '!*.pbtxt' -- "$cur"; compgen -d -- "$cur") ;;
     plot) mapfile -t COMPREPLY < <(compgen -f -- "$cur") ;;
-    info | replay) mapfile -t COMPREPLY < <(compgen -f -X '!*.mcap' -- "$cur"; compgen -d -- "$cur") ;;
+    info | replay | evaluate) mapfile -t COMPREPLY < <(compgen -f -X '!*.mcap' -- "$cur"; compgen -d -- "$cur") ;;
+    calibrate) mapfile -t COMPREPLY < <(compgen -f -X '!*.pbtxt' -- "$cur"; compgen -d -- "$cur") ;;
   esac
 }
 complete -F _dpc dpc
