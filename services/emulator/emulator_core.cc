@@ -397,6 +397,12 @@ void EmulatorCore::HandleLine(SessionId id, Session& session, std::string_view l
   line = Trim(line);
   if (line.empty()) return;  // a blank line asks nothing (clients send one to clear a partial line)
   std::string reply;
+  if (session.instrument == Instrument::kPolarimeter && Lower(line).starts_with(":meas:stream")) {
+    reply = StartStream(session, line, now_ns);
+    if (reply.empty()) return;  // taken: a stream start is not answered
+    Reply(id, session, std::move(reply), now_ns);
+    return;
+  }
   switch (session.instrument) {
     case Instrument::kEpc: reply = EpcReply(line, CountersOf(Instrument::kEpc)); break;
     case Instrument::kPolarimeter: reply = PolarimeterReply(line, CountersOf(Instrument::kPolarimeter)); break;
@@ -467,6 +473,51 @@ std::string EmulatorCore::PolarimeterReply(std::string_view line, Counters& coun
   --counters.queries;
   ++counters.errors;
   return "ERR unknown command";
+}
+
+std::string EmulatorCore::StartStream(Session& session, std::string_view line, int64_t now_ns) {
+  Counters& counters = CountersOf(Instrument::kPolarimeter);
+  const std::vector<std::string_view> words = Words(line);
+  const auto error = [&](const std::string& reason) {
+    ++counters.errors;
+    return "ERR " + reason;
+  };
+  if (Lower(words.front()) != ":meas:stream") return error("unknown command");
+  if (words.size() == 2 && Lower(words[1]) == "off") {
+    ++counters.queries;
+    session.stream_query.clear();
+    return {};
+  }
+  constexpr const char* kUsage = "usage: :MEAS:STREAM SOP|SIN|BOTH <hz> | :MEAS:STREAM OFF";
+  if (words.size() != 3) return error(kUsage);
+  const std::string what = Lower(words[1]);
+  if (what != "sop" && what != "sin" && what != "both") return error(kUsage);
+  const std::string rate(words[2]);
+  char* end = nullptr;
+  const double hz = std::strtod(rate.c_str(), &end);
+  if (end == rate.c_str() || *end != '\0' || !(hz >= kMinStreamHz && hz <= kMaxStreamHz)) {
+    return error(fmt::format("a stream rate from {} to {} Hz", kMinStreamHz, kMaxStreamHz));
+  }
+  ++counters.queries;
+  session.stream_query = ":meas:" + what + "?";
+  session.stream_period_ns = std::max<int64_t>(1, static_cast<int64_t>(std::llround(1e9 / hz)));
+  session.next_stream_ns = now_ns + session.stream_period_ns;
+  return {};
+}
+
+void EmulatorCore::PumpStream(SessionId id, Session& session, int64_t now_ns) {
+  if (session.stream_query.empty() || session.next_stream_ns > now_ns) return;
+  Counters& counters = CountersOf(Instrument::kPolarimeter);
+  const int64_t due = (now_ns - session.next_stream_ns) / session.stream_period_ns + 1;
+  const int64_t lines = std::min<int64_t>(due, kMaxStreamLinesPerOutput);
+  counters.stream_skipped += static_cast<uint64_t>(due - lines);
+  session.next_stream_ns += due * session.stream_period_ns;
+  const std::string query = session.stream_query;
+  for (int64_t i = 0; i < lines; ++i) {
+    Counters ignored;
+    ++counters.streamed;
+    if (!Reply(id, session, PolarimeterReply(query, ignored), now_ns)) return;  // ended: too much queued
+  }
 }
 
 std::string EmulatorCore::ControlReply(SessionId id, std::string_view line, int64_t now_ns) {
@@ -620,7 +671,10 @@ std::string EmulatorCore::Garbage() {
 }
 
 std::string_view EmulatorCore::Output(SessionId id, int64_t now_ns) {
-  const auto it = sessions_.find(id);
+  auto it = sessions_.find(id);
+  if (it == sessions_.end()) return {};
+  PumpStream(id, it->second, now_ns);
+  it = sessions_.find(id);  // a client that does not read is ended by its stream
   if (it == sessions_.end()) return {};
   Session& session = it->second;
   while (!session.pending.empty() && session.pending.front().due_ns <= now_ns) {
@@ -641,6 +695,7 @@ int64_t EmulatorCore::NextDueNs() const {
   int64_t next = std::numeric_limits<int64_t>::max();
   for (const auto& [id, session] : sessions_) {
     if (!session.pending.empty()) next = std::min(next, session.pending.front().due_ns);
+    if (!session.stream_query.empty()) next = std::min(next, session.next_stream_ns);
   }
   return next;
 }
@@ -668,6 +723,10 @@ nlohmann::ordered_json EmulatorCore::Status(int64_t now_ns) const {
     } else {
       counts["queries"] = c.queries;
       if (instrument == Instrument::kEpc) counts["sets"] = c.sets;
+      if (instrument == Instrument::kPolarimeter) {
+        counts["streamed"] = c.streamed;
+        counts["stream_skipped"] = c.stream_skipped;
+      }
     }
     counts["errors"] = c.errors;
     counts["connections"] = {

@@ -35,6 +35,9 @@
 //   polarimeter  *IDN?              → dpc-emulator,POL,0,0.1
 //                :MEAS:SOP?         → s1,s2,s3 of S_out (%.6f each), measured when the query came
 //                :MEAS:SIN?         → S_in likewise;  :MEAS:BOTH? → in1,in2,in3,out1,out2,out3
+//                :MEAS:STREAM <SOP|SIN|BOTH> <hz>  → no reply; from then on the session gets the
+//                                     reading of that query every 1/hz s (1 Hz to 100 kHz), by
+//                                     itself; :MEAS:STREAM OFF stops it. Queries still answer.
 //   either       anything else      → ERR unknown command
 //   control      see ControlHelp(): faults, power cycle, temperature, status (one JSON line)
 //
@@ -227,6 +230,10 @@ class EmulatorCore {
   static constexpr int64_t kMaxFaultCount = 1'000'000'000;
   static constexpr double kMaxFaultS = 3600.0;
   static constexpr double kDefaultPowerCycleS = 0.5;
+  /// A stream's rate, and the most lines one Output call produces for a stream that fell behind
+  /// (the older ones are skipped: a stalled program never floods its client afterwards).
+  static constexpr double kMinStreamHz = 1.0, kMaxStreamHz = 100'000.0;
+  static constexpr int kMaxStreamLinesPerOutput = 16;
 
   using SessionId = uint64_t;
   /// Something worth a line in the program's log: a control command obeyed, a session ended by
@@ -281,11 +288,15 @@ class EmulatorCore {
     size_t pending_bytes = 0;
     int64_t last_due_ns = 0;     ///< replies leave in order
     std::string out;             ///< due, not yet written
+    std::string stream_query;    ///< the polarimeter's query a stream answers ("": no stream)
+    int64_t stream_period_ns = 0;
+    int64_t next_stream_ns = 0;
   };
   /// Every line handled is one query, set or error (the control port: commands and errors).
   struct Counters {
     uint64_t queries = 0, sets = 0, errors = 0;
     uint64_t accepted = 0, refused = 0, ended = 0;
+    uint64_t streamed = 0, stream_skipped = 0;
   };
   struct Faults {
     int64_t garbage = 0, truncate = 0, slow = 0;
@@ -297,6 +308,10 @@ class EmulatorCore {
   void HandleLine(SessionId id, Session& session, std::string_view line, int64_t now_ns);
   std::string EpcReply(std::string_view line, Counters& counters);
   std::string PolarimeterReply(std::string_view line, Counters& counters);
+  /// `:MEAS:STREAM …` on `session`: "" when taken (no reply), else the error to send.
+  std::string StartStream(Session& session, std::string_view line, int64_t now_ns);
+  /// The stream's lines due by `now_ns`, queued as replies.
+  void PumpStream(SessionId id, Session& session, int64_t now_ns);
   std::string ControlReply(SessionId id, std::string_view line, int64_t now_ns);
   /// Queues `reply` (no newline) on the session, with the instrument's faults and latency;
   /// false if the session was ended for it (too much queued).

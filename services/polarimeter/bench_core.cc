@@ -231,15 +231,21 @@ BenchReport BenchCore::RunInstrument(BenchLink* link, InstrumentPolarimeter* pol
   const int64_t start_ns = MonotonicNs();
   int64_t next_ns = start_ns;
   uint64_t sequence = 0;
+  // Stream mode: the instrument's lines pace the loop (Measure waits for the next one); a
+  // failed reading waits a period before the next attempt, so a lost link never spins.
+  const bool stream = polarimeter->device().stream;
+  bool failed = false;
   while (true) {
     if (link->stop_requested()) {
       report.stop_reason = "stopped";
       break;
     }
-    SleepUntilMonotonicNs(next_ns);
+    if (!stream || failed) SleepUntilMonotonicNs(next_ns);
     if (MonotonicNs() - start_ns >= run_ns) break;
     const int64_t now_ns = MonotonicNs();
-    if (now_ns - next_ns > period_ns) {
+    if (stream) {
+      next_ns = now_ns;
+    } else if (now_ns - next_ns > period_ns) {
       report.overruns += (now_ns - next_ns) / period_ns;
       next_ns = now_ns;
     }
@@ -247,6 +253,7 @@ BenchReport BenchCore::RunInstrument(BenchLink* link, InstrumentPolarimeter* pol
     ++report.samples;
     std::string why;
     const std::optional<PolarimeterReading> reading = polarimeter->Measure(now_ns, &why);
+    failed = !reading;
     if (!reading) {
       ++report.failed_readings;
       on_failure(why);

@@ -31,20 +31,35 @@ std::optional<PolarimeterReading> InstrumentPolarimeter::Measure(int64_t now_ns,
     }
     ++counters_.connects;
     backoff_s_ = device_.link.reconnect_min_s;
+    if (device_.stream && !device_.stream_start.empty()) {
+      if (std::string failure = link_.WriteLine(device_.stream_start, timeout_s); !failure.empty()) {
+        next_connect_ns_ = MonotonicNs() + static_cast<int64_t>(backoff_s_ * 1e9);
+        *why = fmt::format("starting the stream ({}): {}", device_.stream_start, failure);
+        return std::nullopt;
+      }
+    }
   }
-  ++counters_.queries;
   std::string failure;
-  const int64_t query_ns = MonotonicNs();
-  const auto reply = link_.Query(device_.query, timeout_s, &failure);
-  const int64_t reply_ns = MonotonicNs();
-  if (reply) query_times_.Add(static_cast<double>(reply_ns - query_ns) * 1e-3);
+  std::optional<std::string> reply;
+  int64_t reply_ns = 0;
+  if (device_.stream) {
+    reply = link_.ReadNewestLine(timeout_s, &failure, &counters_.overtaken);
+    reply_ns = MonotonicNs();
+  } else {
+    ++counters_.queries;
+    const int64_t query_ns = MonotonicNs();
+    reply = link_.Query(device_.query, timeout_s, &failure);
+    reply_ns = MonotonicNs();
+    if (reply) query_times_.Add(static_cast<double>(reply_ns - query_ns) * 1e-3);
+  }
+  const std::string& asked = device_.stream ? std::string("the stream") : device_.query;
   if (!reply) {
     if (!link_.is_open()) {
       next_connect_ns_ = reply_ns + static_cast<int64_t>(backoff_s_ * 1e9);
     } else {
       ++counters_.timeouts;
     }
-    *why = fmt::format("{}: {}", device_.query, failure);
+    *why = fmt::format("{}: {}", asked, failure);
     return std::nullopt;
   }
   using Reply = PolarimeterDeviceConfig::Reply;
@@ -61,7 +76,7 @@ std::optional<PolarimeterReading> InstrumentPolarimeter::Measure(int64_t now_ns,
     if (bad.empty() && !(power >= 0.0)) bad = fmt::format("a power of {} W", power);
     if (!bad.empty()) {
       ++counters_.refused_replies;
-      *why = fmt::format("{}: the power: {}", device_.query, bad);
+      *why = fmt::format("{}: the power: {}", asked, bad);
       return std::nullopt;
     }
     power_w = power;
@@ -69,7 +84,7 @@ std::optional<PolarimeterReading> InstrumentPolarimeter::Measure(int64_t now_ns,
   }
   if (std::string bad = instrument::ParseStokesReply(stokes, vectors, device_.min_dop, values); !bad.empty()) {
     ++counters_.refused_replies;
-    *why = fmt::format("{}: {}", device_.query, bad);
+    *why = fmt::format("{}: {}", asked, bad);
     return std::nullopt;
   }
   PolarimeterReading reading;

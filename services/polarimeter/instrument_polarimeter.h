@@ -1,7 +1,8 @@
 #pragma once
 // A real polarimeter queried over a line protocol (PolarimeterDeviceConfig: SCPI-like text on a
-// serial port or TCP), one query per bench sample. Its reply holds S_out, S_in or both; the
-// sample's time is when the reply arrived. A reply that does not come within
+// serial port or TCP), one query per bench sample, or read in stream mode (the instrument sends
+// its readings by itself; each line is a sample when it arrives, the newest when several wait).
+// Its reply holds S_out, S_in or both; the sample's time is when the reply arrived. A reply that does not come within
 // response_timeout_s, or is not what was asked for (garbage, a cut line, |S| too small), gives
 // no sample, is counted, and says why; a closed connection is reopened after reconnect_min_s,
 // doubling up to reconnect_max_s, and no query waits longer than the timeout: the bench's
@@ -28,6 +29,7 @@ class InstrumentPolarimeter {
  public:
   struct Counters {
     uint64_t queries = 0, readings = 0;
+    uint64_t overtaken = 0;         ///< stream mode: lines skipped for a newer one
     uint64_t timeouts = 0;          ///< no reply in time
     uint64_t refused_replies = 0;   ///< a reply that was not a reading
     uint64_t connects = 0, failed_connects = 0;
@@ -36,8 +38,9 @@ class InstrumentPolarimeter {
   /// `device` validated (ValidatePolarimeterDevice). Connects on the first Measure.
   explicit InstrumentPolarimeter(PolarimeterDeviceConfig device);
 
-  /// One reading now, or nullopt with `*why` (no connection yet: a reconnection attempt when
-  /// due, else at once; a timeout; a refused reply). `now_ns` monotonic.
+  /// One reading now (stream mode: the next line, waiting up to the response timeout), or
+  /// nullopt with `*why` (no connection yet: a reconnection attempt when due, else at once; a
+  /// timeout; a refused reply). `now_ns` monotonic.
   std::optional<PolarimeterReading> Measure(int64_t now_ns, std::string* why);
 
   const Counters& counters() const { return counters_; }

@@ -209,7 +209,8 @@ class PolarimeterService final : public Service {
       if (instrument_) {
         const InstrumentPolarimeter::Counters& c = instrument_->counters();
         out["instrument"] = {{"name", instrument_->name()},         {"queries", c.queries},
-                             {"readings", c.readings},              {"timeouts", c.timeouts},
+                             {"readings", c.readings},              {"overtaken", c.overtaken},
+                             {"timeouts", c.timeouts},
                              {"refused_replies", c.refused_replies}, {"connects", c.connects},
                              {"failed_connects", c.failed_connects}, {"failed_periods", report.failed_readings},
                              {"query_round_trip_us",

@@ -250,6 +250,31 @@ TEST_F(BenchInstrumentsTest, APolarimeterThatFailsGivesNoSamplesThenTheBenchResu
   EXPECT_NE(Slurp(dir_ + "/polarimeter.log").find("no reading"), std::string::npos) << Logs();
 }
 
+TEST_F(BenchInstrumentsTest, AStreamingPolarimeterPacesTheBenchAndItsStreamIsRestartedAfterADisconnect) {
+  const json ports = StartEmulator();
+  const std::string path = BenchScenario(Tcp(ports["epc_tcp"]), Tcp(ports["polarimeter_tcp"]));
+  ScenarioConfig scenario = LoadScenarioFile(path);
+  scenario.polarimeter_device->stream = true;
+  scenario.polarimeter_device->stream_start = ":MEAS:STREAM SOP 400";
+  std::ofstream(path) << ScenarioToText(scenario);
+  StartBench(154, path, 400);
+  ASSERT_TRUE(Locked()) << Logs();
+  // The instrument's rate, one sample per line: over one second, 400 ± 15 %.
+  int64_t now = WallClockNs();
+  const size_t in_one_second = ErrorsDeg(now - 1'500'000'000, now - 500'000'000).size();
+  EXPECT_NEAR(static_cast<double>(in_one_second), 400.0, 60.0);
+  json status = Status();
+  EXPECT_GT(status["polarimeter"]["streamed"].get<int64_t>(), 400) << status.dump();
+  EXPECT_LE(status["polarimeter"]["queries"].get<int64_t>(), 3) << status.dump();  // the stream's start
+  // The connection is lost: no samples, then the stream is started again at the reconnection.
+  ASSERT_EQ(Control("disconnect polarimeter 0.5").rfind("OK", 0), 0u);
+  std::this_thread::sleep_for(1500ms);
+  EXPECT_TRUE(Locked(15s)) << Logs();
+  now = WallClockNs();
+  EXPECT_GT(ErrorsDeg(now - 1'000'000'000, now).size(), 300u);
+  EXPECT_GE(Status()["polarimeter"]["queries"].get<int64_t>(), 2);
+}
+
 TEST_F(BenchInstrumentsTest, CalibrationRecoversTheNonlinearMapsAndTheBenchTracksWithThemAsWithTheTrueOnes) {
   const json ports = StartEmulator();
   const ScenarioConfig truth = LoadScenarioFile(std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/emulator_epc.pbtxt");

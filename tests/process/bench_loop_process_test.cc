@@ -146,8 +146,13 @@ TEST_F(BenchLoopTest, LockstepAcrossProcessesReproducesDpcSim) {
   ASSERT_EQ(bench_rows.size(), 105000u);
   ASSERT_EQ(sim_rows.size(), bench_rows.size());
   double worst = 0.0;
-  for (size_t i = 0; i < sim_rows.size(); ++i) worst = std::max(worst, MaxAbsDifference(bench_rows[i], sim_rows[i]));
-  EXPECT_LT(worst, 1e-9) << "trajectories differ";
+  size_t first_different = sim_rows.size();
+  for (size_t i = 0; i < sim_rows.size(); ++i) {
+    const double difference = MaxAbsDifference(bench_rows[i], sim_rows[i]);
+    if (difference >= 1e-9 && first_different == sim_rows.size()) first_different = i;
+    worst = std::max(worst, difference);
+  }
+  EXPECT_LT(worst, 1e-9) << "trajectories differ from trace row " << first_different << "\n" << Logs();
   const nlohmann::json bench = LastJsonLine(polarimeter.Log());
   const nlohmann::json simulated = LastJsonLine(sim.Log());
   EXPECT_NEAR(bench["error_deg"]["mean"].get<double>(), simulated["error_deg"]["mean"].get<double>(), 1e-9);

@@ -192,6 +192,8 @@ polarimeter_device {
   reply: S_IN_AND_S_OUT
   min_dop: 0.3
   reports_power: true
+  stream: true
+  stream_start: "READ:STREAM ON"
 }
 )pb";
 
@@ -230,6 +232,8 @@ inline void ExpectSameInstruments(const ScenarioConfig& a, const ScenarioConfig&
     EXPECT_EQ(x.reply, y.reply);
     EXPECT_EQ(x.min_dop, y.min_dop);
     EXPECT_EQ(x.reports_power, y.reports_power);
+    EXPECT_EQ(x.stream, y.stream);
+    EXPECT_EQ(x.stream_start, y.stream_start);
   }
 }
 

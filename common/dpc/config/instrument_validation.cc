@@ -167,6 +167,10 @@ void ValidatePolarimeterDevice(const PolarimeterDeviceConfig& device) {
   const std::string path = "polarimeter_device";
   ValidateLink(device.link, path + ".link");
   RequireLineText(device.query, path + ".query", false);
+  RequireLineText(device.stream_start, path + ".stream_start", true);
+  if (!device.stream && !device.stream_start.empty()) {
+    Fail(path + ".stream_start", "given without stream: true (it starts a stream that nothing would read)");
+  }
   RequirePositive(device.min_dop, path + ".min_dop", "the lowest degree of polarization taken must be > 0");
   if (device.min_dop > 1.0) Fail(path + ".min_dop", fmt::format("{}: at most 1", device.min_dop));
 }

@@ -180,6 +180,13 @@ struct PolarimeterDeviceConfig {
   double min_dop = 0.1;
   /// The reply ends with one more field: the optical power in watts (published with the sample).
   bool reports_power = false;
+  /// Stream mode: the instrument sends readings by itself, one line each, at its own rate; the
+  /// query is not sent. Each line is a sample when it arrives (the newest one when several
+  /// are waiting: the others are counted as skipped).
+  bool stream = false;
+  /// Sent at every connection in stream mode to start the stream ("": the instrument streams
+  /// by itself). No reply is expected.
+  std::string stream_start;
 };
 
 /// scenario.proto Scenario.

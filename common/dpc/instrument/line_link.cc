@@ -179,7 +179,11 @@ bool LineLink::Fill(double timeout_s, std::string* why) {
 }
 
 std::optional<std::string> LineLink::ReadLine(double timeout_s, std::string* why) {
-  const auto deadline = Deadline(timeout_s);
+  return ReadLineBy(Deadline(timeout_s), timeout_s, why);
+}
+
+std::optional<std::string> LineLink::ReadLineBy(std::chrono::steady_clock::time_point deadline, double timeout_s,
+                                                std::string* why) {
   for (;;) {
     if (fd_ < 0) {
       if (why->empty()) *why = "not connected";
@@ -221,6 +225,25 @@ std::optional<std::string> LineLink::ReadLine(double timeout_s, std::string* why
   }
 }
 
+std::optional<std::string> LineLink::ReadNewestLine(double timeout_s, std::string* why, uint64_t* overtaken) {
+  std::optional<std::string> line = ReadLine(timeout_s, why);
+  if (!line) return line;
+  // What is already here, without waiting; bounded, so that a flood cannot hold the caller.
+  for (int i = 0; i < 64 && fd_ >= 0; ++i) {
+    const size_t before = buffer_.size();
+    std::string ignored;
+    if (!Fill(0.0, &ignored) || buffer_.size() == before) break;
+  }
+  while (fd_ >= 0 && buffer_.find('\n') != std::string::npos) {
+    std::string ignored;
+    std::optional<std::string> newer = ReadLine(0.0, &ignored);
+    if (!newer) continue;  // an over-long line, dropped: the one before stays the newest
+    line = std::move(newer);
+    ++*overtaken;
+  }
+  return line;
+}
+
 void LineLink::Discard() {
   buffer_.clear();
   discarding_line_ = false;
@@ -241,7 +264,7 @@ std::optional<std::string> LineLink::Query(const std::string& line, double timeo
     *why = std::move(failure);
     return std::nullopt;
   }
-  return ReadLine(std::max(0.0, std::chrono::duration<double>(deadline - Clock::now()).count()), why);
+  return ReadLineBy(deadline, timeout_s, why);  // a timeout says the caller's, not what was left
 }
 
 std::string ParseNumberReply(const std::string& reply, double* out) {

@@ -5,7 +5,9 @@
 // than the timeout it is given, whatever the instrument does (a device that stops answering,
 // answers garbage, or sends an endless line cannot stall its caller).
 
+#include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -38,6 +40,10 @@ class LineLink {
   /// The next line (without "\r\n" or "\n") within `timeout_s`; nullopt with `*why` on a timeout,
   /// a closed connection (the link is then closed), or a line over the limit.
   std::optional<std::string> ReadLine(double timeout_s, std::string* why);
+  /// ReadLine, then whatever has already arrived after it without waiting (at most 32 KiB):
+  /// the newest complete line, the older ones counted in `*overtaken` (a stream read slower
+  /// than the instrument sends it never serves stale lines).
+  std::optional<std::string> ReadNewestLine(double timeout_s, std::string* why, uint64_t* overtaken);
   /// Drops what arrived unasked (e.g. the late reply to a query that timed out), so that the
   /// next line read answers the next line written.
   void Discard();
@@ -50,6 +56,9 @@ class LineLink {
  private:
   std::string OpenTcp(double timeout_s);
   std::string OpenSerial();
+  /// ReadLine by `deadline`; a timeout is said as "no reply within `timeout_s`".
+  std::optional<std::string> ReadLineBy(std::chrono::steady_clock::time_point deadline, double timeout_s,
+                                        std::string* why);
   /// Reads what is available within `timeout_s` into buffer_; false on EOF or error (closed).
   bool Fill(double timeout_s, std::string* why);
 

@@ -359,6 +359,8 @@ PolarimeterDeviceConfig PolarimeterDeviceFromProto(const scenario::PolarimeterDe
   }
   if (p.has_min_dop()) d.min_dop = p.min_dop();
   d.reports_power = p.reports_power();
+  d.stream = p.stream();
+  d.stream_start = p.stream_start();
   return d;
 }
 

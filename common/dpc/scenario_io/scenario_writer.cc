@@ -227,6 +227,8 @@ void PolarimeterDeviceToProto(const PolarimeterDeviceConfig& d, scenario::Polari
   }
   p->set_min_dop(d.min_dop);
   p->set_reports_power(d.reports_power);
+  p->set_stream(d.stream);
+  if (!d.stream_start.empty()) p->set_stream_start(d.stream_start);
 }
 
 }  // namespace

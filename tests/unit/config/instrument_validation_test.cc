@@ -133,5 +133,16 @@ TEST_F(InstrumentValidationTest, APolarimeterHasAQueryAndAMinimumDegreeOfPolariz
   EXPECT_EQ(ErrorLocation(), "polarimeter_device.min_dop");
 }
 
+TEST_F(InstrumentValidationTest, AStreamsStartIsOneLineAndOnlyForAStream) {
+  polarimeter().stream_start = ":MEAS:STREAM SOP 1000";
+  EXPECT_EQ(ErrorLocation(), "polarimeter_device.stream_start");  // without stream: true
+  polarimeter().stream = true;
+  EXPECT_EQ(ErrorLocation(), "(valid)");
+  polarimeter().stream_start = "ON\nOFF";
+  EXPECT_EQ(ErrorLocation(), "polarimeter_device.stream_start");
+  polarimeter().stream_start = "";
+  EXPECT_EQ(ErrorLocation(), "(valid)");  // an instrument that streams by itself
+}
+
 }  // namespace
 }  // namespace dpc

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <optional>
@@ -626,6 +627,58 @@ TEST_F(EmulatorCoreTest, AClientThatDoesNotReadIsEndedOnce64KiBAreQueued) {
   for (int i = 0; i < 10'000 && core_->IsOpen(polarimeter_); ++i) Send(polarimeter_, ":MEAS:SOP?\n");
   EXPECT_FALSE(core_->IsOpen(polarimeter_));
   EXPECT_TRUE(core_->IsOpen(epc_));
+}
+
+TEST_F(EmulatorCoreTest, AStreamSendsTheReadingsAtItsRateByItselfUntilStopped) {
+  Start();
+  Send(polarimeter_, ":MEAS:STREAM SOP 1000\n");  // taken without a reply
+  EXPECT_EQ(Take(polarimeter_), "");
+  EXPECT_EQ(core_->NextDueNs(), kStartNs + kMs);
+  Wait(kMs - 1);
+  EXPECT_EQ(Take(polarimeter_), "");
+  Wait(1);
+  std::string lines = Take(polarimeter_);
+  ASSERT_EQ(std::count(lines.begin(), lines.end(), '\n'), 1) << lines;
+  EXPECT_EQ(std::count(lines.begin(), lines.end(), ','), 2) << lines;  // s1,s2,s3
+  Wait(5 * kMs);
+  lines = Take(polarimeter_);
+  EXPECT_EQ(std::count(lines.begin(), lines.end(), '\n'), 5) << lines;
+  // A query still answers between the stream's lines; BOTH streams six numbers.
+  EXPECT_EQ(Ask(polarimeter_, "*IDN?"), "dpc-emulator,POL,0,0.1");
+  Send(polarimeter_, ":meas:stream both 100\n");
+  Wait(10 * kMs);
+  lines = Take(polarimeter_);
+  ASSERT_EQ(std::count(lines.begin(), lines.end(), '\n'), 1) << lines;
+  EXPECT_EQ(std::count(lines.begin(), lines.end(), ','), 5) << lines;  // S_in, S_out
+  // A stall: at most kMaxStreamLinesPerOutput lines come at once, the rest are counted skipped.
+  Wait(1000 * kMs);
+  lines = Take(polarimeter_);
+  EXPECT_EQ(std::count(lines.begin(), lines.end(), '\n'), EmulatorCore::kMaxStreamLinesPerOutput);
+  EXPECT_EQ(core_->Status(now_ns_)["polarimeter"]["stream_skipped"], 100 - EmulatorCore::kMaxStreamLinesPerOutput);
+  Send(polarimeter_, ":MEAS:STREAM OFF\n");
+  Wait(100 * kMs);
+  EXPECT_EQ(Take(polarimeter_), "");
+  EXPECT_EQ(core_->NextDueNs(), INT64_MAX);
+  // Bad starts are refused with the usage, and start nothing.
+  for (const char* bad : {":MEAS:STREAM", ":MEAS:STREAM SOP", ":MEAS:STREAM SOP 0", ":MEAS:STREAM SOP 1e6",
+                          ":MEAS:STREAM SOP nan", ":MEAS:STREAM XYZ 10", ":MEAS:STREAM SOP 10 20", ":MEAS:STREAMX"}) {
+    EXPECT_EQ(Ask(polarimeter_, bad).rfind("ERR ", 0), 0u) << bad;
+  }
+  Wait(100 * kMs);
+  EXPECT_EQ(Take(polarimeter_), "");
+  // The EPC has no stream.
+  EXPECT_EQ(Ask(epc_, ":MEAS:STREAM SOP 10"), "ERR unknown command");
+}
+
+TEST_F(EmulatorCoreTest, AStreamThatIsNotReadEndsItsSession) {
+  Start();
+  Send(polarimeter_, ":MEAS:STREAM BOTH 100000\n");
+  for (int i = 0; i < 100'000 && core_->IsOpen(polarimeter_); ++i) {
+    Wait(10'000);
+    core_->Output(polarimeter_, now_ns_);  // produced, never written
+  }
+  EXPECT_FALSE(core_->IsOpen(polarimeter_));
+  EXPECT_EQ(core_->Output(polarimeter_, now_ns_), "");
 }
 
 TEST_F(EmulatorCoreTest, AnInstrumentTakesAtMostItsSessionLimit) {

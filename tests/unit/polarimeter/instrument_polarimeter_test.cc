@@ -77,6 +77,42 @@ TEST(InstrumentPolarimeterTest, TheOpticalPowerAtTheEndOfAReplyIsReadToo) {
   EXPECT_NE(why.find("power"), std::string::npos) << why;
 }
 
+TEST(InstrumentPolarimeterTest, AStreamIsStartedAtConnectionAndReadNewestLineFirst) {
+  std::atomic<int> starts{0}, queries{0};
+  dpc::testing::LineServer server([&](const std::string& line) -> std::optional<std::string> {
+    if (line == ":MEAS:STREAM SOP 100") {
+      ++starts;
+      return "1,0,0\n0,1,0\n0,0,1\n";  // three lines at once: the reader was slower
+    }
+    ++queries;
+    return std::nullopt;
+  });
+  PolarimeterDeviceConfig device = Device(server.port());
+  device.stream = true;
+  device.stream_start = ":MEAS:STREAM SOP 100";
+  device.link.response_timeout_s = 0.1;
+  InstrumentPolarimeter polarimeter(device);
+  std::string why;
+  auto reading = polarimeter.Measure(MonotonicNs(), &why);
+  ASSERT_TRUE(reading.has_value()) << why;
+  EXPECT_TRUE(reading->s_out->isApprox(StokesVector::UnitZ()));  // the newest of the three
+  EXPECT_EQ(polarimeter.counters().overtaken, 2u);
+  EXPECT_EQ(polarimeter.counters().queries, 0u);
+  // Nothing more comes: no reading, said as the stream's, and nothing was queried.
+  EXPECT_FALSE(polarimeter.Measure(MonotonicNs(), &why).has_value());
+  EXPECT_NE(why.find("the stream"), std::string::npos) << why;
+  EXPECT_EQ(polarimeter.counters().timeouts, 1u);
+  // The instrument hangs up: the stream is started again on the next connection.
+  server.HangUp();
+  for (int i = 0; i < 50 && starts < 2; ++i) {
+    reading = polarimeter.Measure(MonotonicNs(), &why);
+    std::this_thread::sleep_for(20ms);
+  }
+  EXPECT_EQ(starts.load(), 2);
+  EXPECT_EQ(queries.load(), 0);
+  EXPECT_EQ(polarimeter.counters().connects, 2u);
+}
+
 TEST(InstrumentPolarimeterTest, GarbageAndSilenceGiveNoReadingAndSayWhy) {
   std::atomic<int> mode{0};
   dpc::testing::LineServer server([&](const std::string&) -> std::optional<std::string> {

@@ -41,6 +41,8 @@ TEST(ScenarioWriterTest, InstrumentsRoundTrip) {
   EXPECT_EQ(config.polarimeter_device->reply, PolarimeterDeviceConfig::Reply::kInputAndOutput);
   EXPECT_EQ(config.polarimeter_device->link.port, 5025);
   EXPECT_EQ(config.polarimeter_device->link.reconnect_max_s, 2.0);  // the default
+  EXPECT_TRUE(config.polarimeter_device->stream);
+  EXPECT_EQ(config.polarimeter_device->stream_start, "READ:STREAM ON");
   ExpectSameScenario(FromText(ScenarioToText(config)), config);
   // Without them, none appear.
   EXPECT_EQ(ScenarioToText(PaperScenario("131")).find("device"), std::string::npos);
