@@ -257,7 +257,7 @@ TEST_F(BenchInstrumentsTest, AStreamingPolarimeterPacesTheBenchAndItsStreamIsRes
   scenario.polarimeter_device->stream = true;
   scenario.polarimeter_device->stream_start = ":MEAS:STREAM SOP 400";
   std::ofstream(path) << ScenarioToText(scenario);
-  StartBench(154, path, 400);
+  StartBench(161, path, 400);
   ASSERT_TRUE(Locked()) << Logs();
   // The instrument's rate, one sample per line: over one second, 400 ± 15 %.
   int64_t now = WallClockNs();
