@@ -13,6 +13,7 @@
 //   });
 
 #include <type_traits>
+#include <utility>
 
 namespace dpc {
 
@@ -29,6 +30,16 @@ inline decltype(auto) DispatchCount(int n, F&& f) {
 template <int kFixed>
 constexpr int FixedOr(std::integral_constant<int, kFixed>, int n) {
   return kFixed > 0 ? kFixed : n;
+}
+
+/// Calls f(std::integral_constant<int, i>) for i = 0 … kCount − 1, in order: a loop unrolled by
+/// the compiler in any case, whose body may use i as a constant expression (an array index of
+/// known value keeps arrays in registers, a template argument selects code per iteration).
+template <int kCount, typename F>
+[[gnu::always_inline]] inline void ForEachIndex(F&& f) {
+  [&]<int... kIndex>(std::integer_sequence<int, kIndex...>) {
+    (f(std::integral_constant<int, kIndex>{}), ...);
+  }(std::make_integer_sequence<int, kCount>{});
 }
 
 }  // namespace dpc

@@ -67,6 +67,31 @@ inline void SmallAngleSinCos(double x, double* s, double* c) {
   *c = 1.0 + x2 * (-0.5 + x2 * (1.0 / 24 + x2 * (-1.0 / 720)));
 }
 
+/// a·b + c with one rounding where the target has fused multiply-add (x86-64-v3, the default
+/// build), else with two. The build keeps -ffp-contract=off, so the compiler never fuses behind
+/// the source's back (the same expression gives the same bits wherever it is inlined, and the
+/// compensated sums stay exact); the fused control update (control/fused_gradient_projection.h)
+/// asks for a fused multiply-add explicitly where one shortens its dependency chain: on the
+/// development VM's Zen 5 a multiply feeding an add takes 6 cycles, a fused multiply-add 4.
+/// The same build gives the same bits on every run; a build without FMA (-DDPC_X86_64_V3=OFF)
+/// rounds these twice and so differs from the default build in the last bits of such results.
+[[gnu::always_inline]] inline double MulAdd(double a, double b, double c) {
+#ifdef __FMA__
+  return std::fma(a, b, c);
+#else
+  return a * b + c;
+#endif
+}
+
+/// SmallAngleSinCos by fused multiply-adds (MulAdd): the same series and accuracy, a shorter
+/// dependency chain from x to sin x and cos x (measured on the development VM: 5.8 ns instead of
+/// 7.0 ns), the last bit rounded differently.
+[[gnu::always_inline]] inline void SmallAngleSinCosFused(double x, double* s, double* c) {
+  const double x2 = x * x;
+  *s = x * MulAdd(x2, MulAdd(x2, MulAdd(x2, -1.0 / 5040, 1.0 / 120), -1.0 / 6), 1.0);
+  *c = MulAdd(x2, MulAdd(x2, MulAdd(x2, -1.0 / 720, 1.0 / 24), -0.5), 1.0);
+}
+
 /// The bound below which SmallArcSine is exact to about 1 ulp.
 inline constexpr double kSmallArcSineLimit = 0.18;
 

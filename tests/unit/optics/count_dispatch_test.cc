@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <string>
 #include <type_traits>
 
@@ -79,6 +80,20 @@ TEST(CountDispatchTest, ReferencesAreForwardedAsReferences) {
   EXPECT_EQ(storage, 42);
   static_assert(std::is_same_v<decltype(DispatchCount(3, [&](auto) -> int& { return storage; })),
                                int&>);
+}
+
+TEST(CountDispatchTest, ForEachIndexVisitsEachIndexInOrderAsAConstant) {
+  std::array<int, 4> seen{};
+  int calls = 0;
+  ForEachIndex<4>([&](auto i) {
+    static_assert(std::is_same_v<decltype(i), std::integral_constant<int, decltype(i)::value>>);
+    std::array<int, decltype(i)::value + 1> sized{};  // a constant expression
+    seen[calls++] = static_cast<int>(sized.size()) - 1;
+  });
+  EXPECT_EQ(calls, 4);
+  EXPECT_EQ(seen, (std::array<int, 4>{0, 1, 2, 3}));
+  ForEachIndex<0>([&](auto) { ++calls; });
+  EXPECT_EQ(calls, 4);
 }
 
 }  // namespace

@@ -95,6 +95,37 @@ TEST_F(RotationTest, SinCosMatchesTheLibraryInsideAndOutsideTheSeriesRange) {
   }
 }
 
+TEST_F(RotationTest, MulAddIsAProductPlusASum) {
+  EXPECT_EQ(MulAdd(3.0, 4.0, 5.0), 17.0);
+  EXPECT_EQ(MulAdd(-0.5, 8.0, 4.0), 0.0);
+  // Rounded once with FMA, twice without: within one rounding of the exact value either way.
+  const double a = 1.0 + 0x1p-30, b = 1.0 - 0x1p-30;
+  EXPECT_NEAR(MulAdd(a, b, -1.0), -0x1p-60, 0x1p-52);
+#ifdef __FMA__
+  EXPECT_EQ(MulAdd(a, b, -1.0), -0x1p-60);  // the exact product survives the fused operation
+#endif
+  EXPECT_TRUE(std::isnan(MulAdd(NAN, 1.0, 1.0)));
+}
+
+TEST_F(RotationTest, SmallAngleSinCosFusedIsTheSeriesToAboutOneUlp) {
+  std::uniform_real_distribution<double> x(-kSmallAngleLimit, kSmallAngleLimit);
+  double worst_sin = 0.0, worst_cos = 0.0;
+  for (int i = 0; i < 200000; ++i) {
+    const double v = x(rng_);
+    if (v == 0.0) continue;
+    double s, c;
+    SmallAngleSinCosFused(v, &s, &c);
+    worst_sin = std::max(worst_sin, std::abs(s - std::sin(v)) / std::abs(std::sin(v)));
+    worst_cos = std::max(worst_cos, std::abs(c - std::cos(v)));
+  }
+  EXPECT_LT(worst_sin, 4.5e-16);  // 2 ulp
+  EXPECT_LT(worst_cos, 2.3e-16);  // 1 ulp of 1
+  double s, c;
+  SmallAngleSinCosFused(0.0, &s, &c);
+  EXPECT_EQ(s, 0.0);
+  EXPECT_EQ(c, 1.0);
+}
+
 TEST_F(RotationTest, SmallArcSineIsExactToAboutOneUlpUpToItsLimit) {
   std::uniform_real_distribution<double> x(-kSmallArcSineLimit, kSmallArcSineLimit);
   double worst = 0.0;
