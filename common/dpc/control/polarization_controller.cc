@@ -18,6 +18,7 @@ PolarizationController::PolarizationController(const WaveplateChain& chain, cons
       target_(&target),
       config_(config),
       timing_(timing),
+      custom_law_(static_cast<bool>(law_factory)),
       law_factory_(law_factory ? std::move(law_factory) : MakeControlLaw),
       law_(law_factory_(config_, timing_, chain.control_count(), target.is_point())),
       integrator_(chain, initial_phi),
@@ -38,12 +39,24 @@ PolarizationController::PolarizationController(const WaveplateChain& chain, cons
   rate_problem_.pose = &rate_pose_;
   rate_problem_.loop_mode = LoopMode::kModel;
   rate_problem_.need_jacobian = false;
+  delta_phi_.resize(chain.control_count());
+  fused_ = MakeFusedStep();
+}
+
+std::unique_ptr<FusedControlStep> PolarizationController::MakeFusedStep() const {
+  if (custom_law_) return nullptr;
+  const std::optional<FusedUpdatePlan> plan = PlanFusedUpdate(chain_, *target_, config_);
+  if (!plan) return nullptr;
+  std::unique_ptr<FusedControlStep> step = FusedControlStep::Make(*plan);
+  step->SetCommand(integrator_.phi());
+  return step;
 }
 
 PolarizationController::~PolarizationController() = default;
 
 void PolarizationController::Reset(const ControlVector& phi) {
   integrator_.Reset(phi);
+  if (fused_) fused_->SetCommand(integrator_.phi());
   activated_ = false;
 }
 
@@ -61,14 +74,38 @@ void PolarizationController::SetTarget(const Target& target) {
   target_ = &target;
   problem_.target = target_;
   rate_problem_.target = target_;
+  fused_ = MakeFusedStep();
 }
 
 ControlUpdate PolarizationController::Update(const ControlInput& input) {
+  if (fused_) return FusedUpdate(input);
   chain_.ComputePose(integrator_.phi(), &pose_);
   return Update(input, pose_);
 }
 
+ControlUpdate PolarizationController::FusedUpdate(const ControlInput& input) {
+  if (!activated_) {
+    law_->Activate(integrator_.phi());
+    activated_ = true;
+  }
+  const FusedUpdateResult result = fused_->Update(input.s_in, input.s_out, &delta_phi_);
+  fused_diagnostics_.rank = result.rank;
+  fused_diagnostics_.singular_values = result.singular_values;
+  fused_diagnostics_.nullspace_active = result.nullspace_active;
+  ControlUpdate update;
+  update.status = !result.applied ? ControlStatus::kNotFinite
+                  : result.rank < 2 ? ControlStatus::kRankDeficient
+                                    : ControlStatus::kOk;
+  // The integrator adds the same Δφ the fused step added to its command (the same bits).
+  update.outcome = integrator_.Apply(update.status, delta_phi_);
+  return update;
+}
+
 ControlUpdate PolarizationController::Update(const ControlInput& input, const ChainPose& pose) {
+  if (fused_) {
+    fused_->SetPose(pose);
+    return FusedUpdate(input);
+  }
   if (!activated_) {
     law_->Activate(integrator_.phi());
     activated_ = true;
@@ -100,6 +137,7 @@ ControlUpdate PolarizationController::Update(const ControlInput& input, const Ch
 void PolarizationController::AdvanceAlongRate(double dt_s) {
   step_ = rate_ * dt_s;
   integrator_.Apply(ControlStatus::kOk, step_);
+  if (fused_) fused_->SetCommand(integrator_.phi());
 }
 
 void PolarizationController::SolveRate(const ControlProblem& problem, const Vector3& omega,

@@ -33,6 +33,13 @@
 // order. Such an update aims at the measured input (no prediction, no lead): the driver moves
 // the waveplates along the ramp, and AdvanceAlongRate moves φ with them before the next update.
 //
+// The paper's configurations (PlanFusedUpdate: 3 or 4 stages on S1/S2/S3 with θ = k·φ + θ0,
+// gp / gpt / pinv, a point target, none of the options, the built-in laws) run the fused
+// update (fused_gradient_projection.h): the same step in one fixed-size pass, equal to the
+// general path to round-off. It keeps the pose of the command itself (incremental sines and
+// cosines, as the simulator does), so Update(input) costs no library sine; a pose passed in is
+// taken as it is. problem() is the general path's only.
+//
 // Real-time: Update and AdvanceAlongRate do not allocate.
 
 #include <cstdint>
@@ -45,6 +52,7 @@
 #include "dpc/control/control_problem.h"
 #include "dpc/control/controller_config.h"
 #include "dpc/control/delay_compensator.h"
+#include "dpc/control/fused_gradient_projection.h"
 #include "dpc/control/target.h"
 #include "dpc/control/task_pseudo_inverse.h"
 #include "dpc/optics/waveplate_chain.h"
@@ -93,7 +101,8 @@ class PolarizationController {
   /// Real-time. One update from `input`, with `pose` the chain at phi() (the caller keeps it,
   /// e.g. the simulator's delay line). After it, phi() is the new command.
   ControlUpdate Update(const ControlInput& input, const ChainPose& pose);
-  /// Real-time. The same with the pose computed here.
+  /// Real-time. The same with the pose computed here (on the fused path: carried over from the
+  /// previous update, exact after a Reset).
   ControlUpdate Update(const ControlInput& input);
 
   /// Real-time. Moves the command along the latest rate for `dt_s` (the waveplates followed
@@ -105,8 +114,13 @@ class PolarizationController {
   /// The rate of the latest update with ControlInput::rate_command (zero before any).
   const ControlVector& rate_per_s() const { return rate_; }
   const ControlLaw& law() const { return *law_; }
-  const ControlDiagnostics& diagnostics() const { return law_->diagnostics(); }
-  /// The latest update's task: s_out_measured, the model output, the task error.
+  const ControlDiagnostics& diagnostics() const {
+    return fused_ ? fused_diagnostics_ : law_->diagnostics();
+  }
+  /// Whether the updates run the fused update (see the file comment).
+  bool fused() const { return fused_ != nullptr; }
+  /// The latest update's task on the general path: s_out_measured, the model output, the task
+  /// error (not kept on the fused path).
   const ControlProblem& problem() const { return problem_; }
   /// The delay compensation, if configured.
   const DelayCompensator* compensator() const { return compensator_ ? &*compensator_ : nullptr; }
@@ -114,6 +128,11 @@ class PolarizationController {
   const Target& target() const { return *target_; }
 
  private:
+  /// The fused update for the chain, the current target and the configuration at the command
+  /// phi(), or null when they are not in its class or a law factory was given.
+  std::unique_ptr<FusedControlStep> MakeFusedStep() const;
+  /// Update on the fused path, at its command.
+  ControlUpdate FusedUpdate(const ControlInput& input);
   /// The rate for the current task (see the file comment), evaluated halfway across `horizon_s`.
   void ComputeRate(double horizon_s);
   /// φ̇ for `problem`'s task and basis and an input turning at ω (rad/s).
@@ -123,8 +142,11 @@ class PolarizationController {
   const Target* target_;
   ControllerConfig config_;
   LawTiming timing_;
+  bool custom_law_;  ///< a law factory was given: never the fused path
   ControlLawFactory law_factory_;
   std::unique_ptr<ControlLaw> law_;
+  std::unique_ptr<FusedControlStep> fused_;
+  ControlDiagnostics fused_diagnostics_;
   ControlIntegrator integrator_;
   bool activated_ = false;
   ControlProblem problem_;

@@ -36,12 +36,14 @@ ControlLawFactory Scripted(int* activations, ControlStatus status = ControlStatu
 }
 
 TEST(PolarizationControllerTest, AnUpdateIsTheProblemTheLawAndTheIntegratorOfThePaper) {
-  // The same three steps written out by hand (eqs. 3, 5, 6) give the same bits.
+  // The same three steps written out by hand (eqs. 3, 5, 6) give the same bits on the general
+  // path (a law factory keeps the controller off the fused one).
   const WaveplateChain chain = WaveplateChain::FromAxes("3131");
   ControllerConfig config;
   config.step = 0.3;
   const ControlVector phi0 = (ControlVector(4) << 0.1, -0.2, 0.3, 0.05).finished();
-  PolarizationController controller(chain, kPaperTarget, config, LawTiming{}, phi0);
+  PolarizationController controller(chain, kPaperTarget, config, LawTiming{}, phi0, MakeControlLaw);
+  ASSERT_FALSE(controller.fused());
 
   std::unique_ptr<ControlLaw> law = MakeControlLaw(config, LawTiming{}, 4, true);
   ControlIntegrator integrator(chain, phi0);
@@ -69,6 +71,100 @@ TEST(PolarizationControllerTest, AnUpdateIsTheProblemTheLawAndTheIntegratorOfThe
     ASSERT_EQ(controller.phi(), integrator.phi()) << "sample " << k;
   }
   EXPECT_LT(kPaperTarget.DistanceRad(chain.Output(controller.phi(), s_in)), 0.2);
+}
+
+// The fused update (fused_gradient_projection.h) against the general path on the same inputs:
+// the paper's devices (axes at compile time) and another axis sequence (at run time), each law
+// of its class, both loop modes, from a singular start (φ = 0 and S_in on the second stage's
+// axis: T has rank 1, the near-singular fallback runs) and across a Reset.
+struct FusedCase {
+  const char* axes;
+  ControlMethod method;
+  LoopMode loop;
+};
+
+class FusedUpdateTest : public ::testing::TestWithParam<FusedCase> {};
+
+TEST_P(FusedUpdateTest, FollowsTheGeneralPath) {
+  const FusedCase c = GetParam();
+  const WaveplateChain chain = WaveplateChain::FromAxes(c.axes);
+  const int n = chain.control_count();
+  ControllerConfig config;
+  config.method = c.method;
+  config.loop = c.loop;
+  config.threshold = 0.2;  // gpt switches its null-space term on and off
+  const ControlVector phi0 = ControlVector::Zero(n);
+  PolarizationController fused(chain, kPaperTarget, config, LawTiming{}, phi0);
+  PolarizationController general(chain, kPaperTarget, config, LawTiming{}, phi0, MakeControlLaw);
+  ASSERT_TRUE(fused.fused());
+  ASSERT_FALSE(general.fused());
+  ControlInput input;
+  input.s_in = chain.stages()[1].axis();
+  const Matrix3 turn = RotationAboutAxis(Vector3(0.3, -0.2, 1.0).normalized(), 0.01);
+  double worst = 0.0;
+  int rank_deficient = 0;
+  for (int k = 0; k < 3000; ++k) {
+    if (k == 1500) {
+      fused.Reset(phi0);
+      general.Reset(phi0);
+    }
+    input.s_out = chain.Output(general.phi(), input.s_in);
+    const ControlUpdate a = fused.Update(input);
+    const ControlUpdate b = general.Update(input);
+    input.s_in = turn * input.s_in;
+    ASSERT_EQ(a.status, b.status) << k;
+    ASSERT_EQ(a.outcome, b.outcome) << k;
+    rank_deficient += a.status == ControlStatus::kRankDeficient;
+    worst = std::max(worst, (fused.phi() - general.phi()).cwiseAbs().maxCoeff());
+    ASSERT_EQ(fused.diagnostics().nullspace_active, general.diagnostics().nullspace_active) << k;
+    ASSERT_EQ(fused.diagnostics().rank, general.diagnostics().rank) << k;
+    ASSERT_NEAR(fused.diagnostics().singular_values.min(),
+                general.diagnostics().singular_values.min(), 1e-9) << k;
+  }
+  EXPECT_LT(worst, 1e-10);
+  EXPECT_GT(rank_deficient, 0);
+  // Tracking (not diverged): the lag of a rotation of 0.01 rad per update at step μ = 0.1 is
+  // about 0.01·(1 − μ)/μ = 0.09 rad.
+  EXPECT_LT(kPaperTarget.DistanceRad(chain.Output(fused.phi(), input.s_in)), 0.15);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Configurations, FusedUpdateTest,
+    ::testing::Values(FusedCase{"131", ControlMethod::kGradientProjection, LoopMode::kModel},
+                      FusedCase{"3131", ControlMethod::kGradientProjection, LoopMode::kModel},
+                      FusedCase{"3131", ControlMethod::kThresholdedGradientProjection,
+                                LoopMode::kMeasured},
+                      FusedCase{"131", ControlMethod::kPseudoInverse, LoopMode::kMeasured},
+                      FusedCase{"212", ControlMethod::kGradientProjection, LoopMode::kModel},
+                      FusedCase{"2323", ControlMethod::kThresholdedGradientProjection,
+                                LoopMode::kModel}));
+
+TEST(PolarizationControllerTest, OnlyThePapersClassRunsFused) {
+  const WaveplateChain paper = WaveplateChain::FromAxes("3131");
+  EXPECT_TRUE(PolarizationController(paper, kPaperTarget, ControllerConfig{}, LawTiming{},
+                                     ControlVector::Zero(4))
+                  .fused());
+  ControllerConfig rls;
+  rls.method = ControlMethod::kRegularizedLeastSquares;
+  EXPECT_FALSE(PolarizationController(paper, kPaperTarget, rls, LawTiming{}, ControlVector::Zero(4))
+                   .fused());
+  ControllerConfig predicting;
+  predicting.prediction = PredictionConfig{};
+  EXPECT_FALSE(PolarizationController(paper, kPaperTarget, predicting, LawTiming{},
+                                      ControlVector::Zero(4))
+                   .fused());
+  const WaveplateChain five = WaveplateChain::FromAxes("31313");
+  EXPECT_FALSE(PolarizationController(five, kPaperTarget, ControllerConfig{}, LawTiming{},
+                                      ControlVector::Zero(5))
+                   .fused());
+  // A set target leaves the fused path, a point target brings it back.
+  PolarizationController controller(paper, kPaperTarget, ControllerConfig{}, LawTiming{},
+                                    ControlVector::Zero(4));
+  const Target linear = Target::Set(Vector3::UnitZ(), 0.0);
+  controller.SetTarget(linear);
+  EXPECT_FALSE(controller.fused());
+  controller.SetTarget(kPaperTarget);
+  EXPECT_TRUE(controller.fused());
 }
 
 TEST(PolarizationControllerTest, ActivatesTheLawAtTheFirstUpdateAndAfterEveryReset) {
