@@ -31,51 +31,23 @@ ClosedLoopSimulator::ClosedLoopSimulator(const ScenarioConfig& scenario,
   activation_sample_ = static_cast<int64_t>(std::ceil(activation - 1e-9 * std::max(1.0, activation)));
   // Fail here, not in Run, if the law does not fit the device.
   law_factory_(scenario_.controller, law_timing_, chain_->control_count(), target_->is_point());
-  fast_path_ = PlanFastPath(scenario_, *chain_, custom_law_);
+  fast_path_ = PlanFastPath(scenario_, *chain_, *target_, custom_law_);
 }
 
-std::optional<ClosedLoopSimulator::FastPathPlan> ClosedLoopSimulator::PlanFastPath(
-    const ScenarioConfig& scenario, const WaveplateChain& chain, bool custom_law) {
-  const ControllerConfig& c = scenario.controller;
-  const bool law_fits = c.method == ControlMethod::kGradientProjection ||
-                        c.method == ControlMethod::kThresholdedGradientProjection ||
-                        c.method == ControlMethod::kPseudoInverse;
-  const int stages = chain.stage_count();
-  // The options beyond the paper run in the general loop (the fused loop stays the paper's).
-  const bool paper_options = !c.prediction && !c.singularity_damping && !c.curvature_correction &&
-                             c.nullspace_criterion == NullspaceCriterion::kMinimumNorm;
-  if (custom_law || !law_fits || !paper_options ||
-      scenario.target.kind != TargetConfig::Kind::kPoint ||
-      (stages != 3 && stages != 4) || chain.control_count() != stages || chain.has_ranges()) {
-    return std::nullopt;
-  }
-  FastPathPlan plan;
-  plan.stages = stages;
-  for (int i = 0; i < stages; ++i) {
-    const WaveplateStage& stage = chain.stages()[i];
-    const ControlMap& map = stage.controls()[0].map;
-    if (stage.kind() != WaveplateStage::Kind::kFixedAxis ||
-        ClassifyAxis(stage.axis()) == ElementalAxis::kGeneral ||
-        map.kind() != ControlMap::Kind::kLinear) {
-      return std::nullopt;
-    }
-    plan.axis[i] = ClassifyAxis(stage.axis());
-    plan.rad_per_unit[i] = map.linear_rad_per_unit();
-    plan.offset_rad[i] = map.AngleRad(0.0);
-  }
-  plan.step = c.step;
-  plan.pseudo_inverse_only = c.method == ControlMethod::kPseudoInverse;
-  plan.nullspace_step = plan.pseudo_inverse_only ? 0.0 : c.nullspace_step;
-  if (c.method == ControlMethod::kThresholdedGradientProjection) plan.threshold = c.threshold;
-  plan.singular_value_tolerance = c.singular_value_tolerance;
-  return plan;
+std::optional<FusedUpdatePlan> ClosedLoopSimulator::PlanFastPath(const ScenarioConfig& scenario,
+                                                                 const WaveplateChain& chain,
+                                                                 const Target& target,
+                                                                 bool custom_law) {
+  if (custom_law) return std::nullopt;
+  return PlanFusedUpdate(chain, target, scenario.controller);
 }
 
 SimulationResult ClosedLoopSimulator::Run(SimulationObserver* observer, int64_t decimation) {
   if (decimation < 1) decimation = 1;
   if (fast_path_) {
-    return fast_path_->stages == 3 ? RunFastPath<3>(observer, decimation)
-                                   : RunFastPath<4>(observer, decimation);
+    return DispatchStageAxes(fast_path_->axis, fast_path_->stages, [&](const auto& axes) {
+      return RunFastPath(axes, observer, decimation);
+    });
   }
   return RunGeneral(observer, decimation);
 }

@@ -18,10 +18,10 @@
 // run length. Nothing in the per-sample loop allocates.
 //
 // Two loops, the same results: the general loop runs any device, law (including a user's) and
-// target through ControlProblem / ControlLaw; the fast path, selected automatically for the
-// paper's class of configurations (3 or 4 fixed-axis stages on S1/S2/S3 with linear maps and no
-// ranges, a point target, gp / gpt / pinv, either loop mode, any input and noise), fuses
-// kinematics, task, law and integration into one fixed-size loop body
+// target through PolarizationController / ControlLaw; the fast path, selected automatically for
+// the paper's class of configurations (PlanFusedUpdate: 3 or 4 fixed-axis stages on S1/S2/S3
+// with linear maps and no ranges, a point target, gp / gpt / pinv, either loop mode, any input
+// and noise), inlines the fused control update into one fixed-size loop body
 // (closed_loop_simulator_fast_path.cc). Its trajectories equal the general loop's to round-off
 // (tests/unit/sim/closed_loop_simulator_fast_path_test.cc).
 
@@ -36,6 +36,7 @@
 #include "dpc/control/control_law_factory.h"
 #include "dpc/control/control_integrator.h"
 #include "dpc/control/control_law.h"
+#include "dpc/control/fused_gradient_projection.h"
 #include "dpc/disturbance/input_sop_generator.h"
 #include "dpc/disturbance/polarimeter_noise.h"
 #include "dpc/optics/waveplate_chain.h"
@@ -106,22 +107,13 @@ class ClosedLoopSimulator {
   int64_t activation_sample() const { return activation_sample_; }
 
  private:
-  /// What the fast path needs to know, fixed at construction.
-  struct FastPathPlan {
-    int stages = 0;
-    ElementalAxis axis[4] = {};
-    double rad_per_unit[4] = {}, offset_rad[4] = {};
-    double step = 0.0, nullspace_step = 0.0;
-    std::optional<double> threshold;
-    bool pseudo_inverse_only = false;  ///< pinv: no null-space term
-    double singular_value_tolerance = 1e-12;
-  };
-  /// The plan if the scenario is in the fast path's class, else nullopt.
-  static std::optional<FastPathPlan> PlanFastPath(const ScenarioConfig& scenario,
-                                                  const WaveplateChain& chain, bool custom_law);
+  /// The fused update's plan if the scenario is in the fast path's class, else nullopt.
+  static std::optional<FusedUpdatePlan> PlanFastPath(const ScenarioConfig& scenario,
+                                                     const WaveplateChain& chain,
+                                                     const Target& target, bool custom_law);
   SimulationResult RunGeneral(SimulationObserver* observer, int64_t decimation);
-  template <int kStages>
-  SimulationResult RunFastPath(SimulationObserver* observer, int64_t decimation);
+  template <typename Axes>
+  SimulationResult RunFastPath(const Axes& axes, SimulationObserver* observer, int64_t decimation);
 
   ScenarioConfig scenario_;
   bool custom_law_;
@@ -133,7 +125,7 @@ class ClosedLoopSimulator {
   int64_t delay_samples_ = 1;
   int64_t total_samples_ = 0;
   int64_t activation_sample_ = 0;
-  std::optional<FastPathPlan> fast_path_;
+  std::optional<FusedUpdatePlan> fast_path_;
 };
 
 }  // namespace dpc
