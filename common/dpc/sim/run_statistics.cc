@@ -79,10 +79,8 @@ void RunStatistics::Flush() const {
     }
   }
   // In time order: lock tracking and the error window.
-  double window_error_deg[kBatch], window_leak[kBatch];
+  double window_error_deg[kBatch], window_leak[kBatch], window_raw_leak[kBatch];
   int window_count = 0;
-  // Blocked sum: plain within the batch, compensated across batches.
-  double leak_batch[2] = {0.0, 0.0};
   for (int i = 0; i < count; ++i) {
     const double t_s = pending_t_s_[i];
     const bool below = error_rad[i] < lock_threshold_rad_;
@@ -107,12 +105,21 @@ void RunStatistics::Flush() const {
       window_end_s_ = t_s;
       window_error_deg[window_count] = error_rad[i] * kRadToDeg;
       window_leak[window_count] = std::max(leak[i], kLeakFloor);
-      leak_batch[window_count & 1] += leak[i];
+      window_raw_leak[window_count] = leak[i];
       ++window_count;
     }
   }
   leak_log_sum_.AddBatch(window_leak, window_count);
-  CompensatedAdd(leak_batch[0] + leak_batch[1], &leak_sum_, &leak_compensation_);
+  // Blocked sum: plain within the batch (even and odd window samples in two registers; an
+  // array indexed by parity would chain through memory), compensated across batches.
+  double even = 0.0, odd = 0.0;
+  int w = 0;
+  for (; w + 1 < window_count; w += 2) {
+    even += window_raw_leak[w];
+    odd += window_raw_leak[w + 1];
+  }
+  if (w < window_count) even += window_raw_leak[w];
+  CompensatedAdd(even + odd, &leak_sum_, &leak_compensation_);
   error_deg_.AddBatch(window_error_deg, window_count);
   // Controls, one histogram at a time.
   for (int c = 0; c < control_count_; ++c) {
