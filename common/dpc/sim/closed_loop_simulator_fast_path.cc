@@ -3,12 +3,12 @@
 // pinv, either loop mode): the fused control update (control/fused_gradient_projection.h)
 // inlined into the sample loop, with the paper's devices' axes fixed at compile time.
 //
-// Per sample, in the general loop's order: the input, the plant (ElementalOutput with the pose of
-// the command issued D samples ago), the statistics of the true output, the polarimeters, then
-// the controller's update at its latest command, whose pose goes into the delay line. Only the
-// update depends on the previous update; the processor runs the rest in the shadow of that
-// dependency chain, which is why the loop goes sample by sample (the general loop's blocks of D
-// samples, input first, then the updates, would make the two add up instead).
+// Per sample: the input, the plant (ElementalOutput with the pose of the command issued D
+// samples ago), the statistics of the true output, the polarimeters, and the controller's update
+// at its latest command, whose pose goes into the delay line. Only the updates depend on each
+// other; the processor runs the rest in the shadow of that dependency chain, which is why the
+// loop goes sample by sample (the general loop's blocks of D samples, input first, then the
+// updates, would make the two add up) and observes each sample one update ahead (see the loop).
 //
 // It shares the input generator, the polarimeters, the statistics and the near-singular
 // fallback with the general loop. Only round-off separates the two loops' trajectories.
@@ -47,30 +47,51 @@ SimulationResult ClosedLoopSimulator::RunFastPath(const Axes& axes, SimulationOb
   ControlVector observed_phi(N);
   double delta_phi[N];
 
-  // Sample by sample: the input, the plant (the command of D samples ago), the statistics and
-  // the measurements do not depend on the controller's latest update, so the processor runs
-  // them in the shadow of the controller's dependency chain.
+  // What the controller reads of a sample: both polarimeters' readings.
+  struct Measured {
+    StokesVector s_in, s_out;
+  };
+  Measured measured[2];  // sample k in measured[k & 1]
+  // The input, the plant (the command of D samples ago), the observer, the statistics and the
+  // polarimeters of `sample`, whose pose is in `slot`.
+  const auto observe = [&](int64_t sample, int64_t slot) {
+    const double t_s = static_cast<double>(sample) * dt_s;
+    const StokesVector& s_in = run.input.Next();
+    const Pose& applied = line.at(slot);
+    const StokesVector s_out = ElementalOutput(axes, applied, s_in);
+    if (run.TakesSample()) {
+      for (int e = 0; e < N; ++e) observed_phi[e] = applied.phi[e];
+      run.observer().OnSample(SampleView{sample, t_s, s_in, s_out, observed_phi,
+                                         target.DistanceRad(s_out) * kRadToDeg});
+    }
+    if (sample >= activation_sample_) {
+      run.statistics.AddSample(t_s, s_out, ToArray(applied.phi).data());
+      Measured& m = measured[sample & 1];
+      m.s_in = run.input_polarimeter.Measure(s_in);
+      m.s_out = run.output_polarimeter.Measure(s_out);
+    }
+  };
+
+  // Only the controller's updates depend on each other. Sample k + 1 is observed before the
+  // update of sample k (its command was issued D ≥ 2 samples before): the processor then has
+  // the next sample's work in hand while the update's dependency chain runs, and the update
+  // finds its readings long computed. With D = 1 the next sample needs this update's command.
+  const int64_t lead = delay_samples_ >= 2 ? 1 : 0;
   int64_t slot = 0, k = 0;
+  if (lead > 0 && total_samples_ > 0) observe(0, 0);
   while (k < total_samples_) {
     // Progress (and an early stop) as often as the general loop's blocks end.
     const int64_t end = std::min(total_samples_, k + kMaxBlock);
     for (; k < end; ++k, slot = line.Next(slot)) {
-      const double t_s = static_cast<double>(k) * dt_s;
-      const StokesVector& s_in = run.input.Next();
-      const Pose& applied = line.at(slot);
-      const StokesVector s_out = ElementalOutput(axes, applied, s_in);
-      if (run.TakesSample()) {
-        for (int e = 0; e < N; ++e) observed_phi[e] = applied.phi[e];
-        run.observer().OnSample(SampleView{k, t_s, s_in, s_out, observed_phi,
-                                           target.DistanceRad(s_out) * kRadToDeg});
+      if (lead == 0) {
+        observe(k, slot);
+      } else if (k + 1 < total_samples_) {
+        observe(k + 1, line.Next(slot));
       }
       bool issued = false;
       if (k >= activation_sample_) {
-        run.statistics.AddSample(t_s, s_out, ToArray(applied.phi).data());
-        const StokesVector in_measured = run.input_polarimeter.Measure(s_in);
-        const StokesVector out_measured = run.output_polarimeter.Measure(s_out);
-        const FusedUpdateResult update =
-            controller.Update(in_measured, out_measured, &command, delta_phi);
+        const Measured& m = measured[k & 1];
+        const FusedUpdateResult update = controller.Update(m.s_in, m.s_out, &command, delta_phi);
         run.statistics.AddUpdate(update.nullspace_active, !update.applied,
                                  update.applied && update.rank < 2, false, update.singular_values);
         if (update.applied) {
