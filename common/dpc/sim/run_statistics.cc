@@ -37,7 +37,8 @@ RunStatistics::RunStatistics(const Target& target, int control_count, double act
       lock_threshold_rad_(lock_threshold_deg / kRadToDeg),
       fixed_start_s_(statistics_start_s),
       settle_s_(settle_s),
-      pending_phi_(static_cast<size_t>(kBatch) * static_cast<size_t>(control_count)),
+      pending_phi_(static_cast<size_t>(kBatch) * static_cast<size_t>(std::max(4, control_count))),
+      phi_stride_(std::max(4, control_count)),
       error_deg_(1e-12, 360.0) {
   rearm_rad_ = 0.5 * lock_threshold_rad_;
   phi_.reserve(control_count);
@@ -121,9 +122,15 @@ void RunStatistics::Flush() const {
   if (w < window_count) even += window_raw_leak[w];
   CompensatedAdd(even + odd, &leak_sum_, &leak_compensation_);
   error_deg_.AddBatch(window_error_deg, window_count);
-  // Controls, one histogram at a time.
-  for (int c = 0; c < control_count_; ++c) {
-    phi_[c].AddBatch(pending_phi_.data() + static_cast<size_t>(c) * kBatch, count);
+  // Controls: up to four histograms at once, more one at a time.
+  if (control_count_ <= 4) {
+    LogHistogram* histograms[4] = {};
+    for (int c = 0; c < control_count_; ++c) histograms[c] = &phi_[c];
+    LogHistogram::AddBatchLanes(histograms, control_count_, pending_phi_.data(), count);
+  } else {
+    for (int c = 0; c < control_count_; ++c) {
+      phi_[c].AddBatch(pending_phi_.data() + c, count, phi_stride_);
+    }
   }
 }
 

@@ -115,7 +115,10 @@ class RunStatistics {
   mutable double pending_t_s_[kBatch];
   mutable double pending_s_out_[kBatch][3];        ///< set targets
   mutable double pending_chord_squared_[kBatch];   ///< point targets: |S_out − S*|²
-  mutable std::vector<double> pending_phi_;  ///< control_count × kBatch, control-major
+  /// kBatch rows of phi_stride_ (sample-major): up to four controls fill one row of four, which
+  /// Flush adds to the four histograms at once (LogHistogram::AddBatchLanes).
+  mutable std::vector<double> pending_phi_;
+  int phi_stride_;
 
   // Error window.
   mutable bool window_open_ = false;
@@ -153,10 +156,10 @@ inline void RunStatistics::AddSample(double t_s, const StokesVector& s_out,
     pending_s_out_[i][1] = s_out[1];
     pending_s_out_[i][2] = s_out[2];
   }
-  double* phi = pending_phi_.data() + i;
+  double* phi = pending_phi_.data() + static_cast<ptrdiff_t>(i) * phi_stride_;
   DispatchCount(control_count_, [&](auto fixed) {
     const int count = FixedOr(fixed, control_count_);
-    for (int c = 0; c < count; ++c) phi[c * kBatch] = phi_applied[c];
+    for (int c = 0; c < count; ++c) phi[c] = phi_applied[c];
   });
   if (++pending_ == kBatch) Flush();
 }

@@ -376,5 +376,40 @@ TEST(LogHistogramBatchTest, AddBatchEqualsAddOneByOne) {
   }
 }
 
+TEST(LogHistogramBatchTest, AddBatchLanesEqualsAddOneByOnePerColumn) {
+  std::mt19937_64 rng(6);
+  std::normal_distribution<double> normal(0.0, 2.0);
+  constexpr int kRows = 700;  // more than one chunk, not a multiple of four
+  std::vector<double> rows(4 * kRows);
+  for (auto& v : rows) v = normal(rng);
+  rows[4 * 17 + 1] = NAN;
+  rows[4 * 18 + 2] = 0.0;
+  rows[4 * 19 + 0] = -1e-20;  // below the smallest binned magnitude
+  rows[4 * 20 + 2] = 1e30;    // beyond the largest
+  rows[4 * 21 + 3] = 5.0;     // the ignored column of a 3-lane call
+  for (int lanes : {3, 4}) {
+    std::vector<LogHistogram> one(4), lane(4);
+    LogHistogram* histograms[4] = {&lane[0], &lane[1], &lane[2], &lane[3]};
+    for (int c = 0; c < lanes; ++c) {
+      one[c].Add(0.25);  // earlier samples: the batch continues them
+      lane[c].Add(0.25);
+      for (int i = 0; i < kRows; ++i) one[c].Add(rows[4 * i + c]);
+    }
+    LogHistogram::AddBatchLanes(histograms, lanes, rows.data(), 500);
+    LogHistogram::AddBatchLanes(histograms, lanes, rows.data() + 4 * 500, kRows - 500);
+    for (int c = 0; c < lanes; ++c) {
+      EXPECT_EQ(lane[c].count(), one[c].count()) << c;
+      EXPECT_EQ(lane[c].nan_count(), one[c].nan_count()) << c;
+      EXPECT_EQ(lane[c].min(), one[c].min()) << c;
+      EXPECT_EQ(lane[c].max(), one[c].max()) << c;
+      EXPECT_NEAR(lane[c].sum(), one[c].sum(), 1e-12 * std::abs(one[c].sum()) + 1e-12) << c;
+      for (double p : {0.0, 1.0, 50.0, 99.0, 100.0}) {
+        EXPECT_EQ(lane[c].Percentile(p), one[c].Percentile(p)) << c << " " << p;
+      }
+    }
+    EXPECT_EQ(lane[3].count(), lanes == 4 ? one[3].count() : 0);
+  }
+}
+
 }  // namespace
 }  // namespace dpc
