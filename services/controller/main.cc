@@ -76,6 +76,7 @@ class ControllerService final : public Service {
         bench_id_, [this](const msg::WaveplateState& message, const auto& info) { OnState(message, info); });
     samples_ = participant_.MakeReader<msg::StokesSample>(
         bench_id_, [this](const msg::StokesSample& message, const auto& info) { OnSample(message, info); });
+    for (const std::string& line : bus::DescribeShmCleanup(participant_.shm_cleanup())) spdlog::info("{}", line);
     spdlog::info("law {}, priority {}, profiles {}, domain {}", MethodName(core_settings_.controller.method),
                  core_settings_.priority, participant_.profiles_file(), common.domain_id);
   }

@@ -123,6 +123,7 @@ class DriverService final : public Service {
         bench_id_, [this](const msg::Target& message, const fdds::SampleInfo& info) { OnTarget(message, info); });
     requests_ = participant_.MakeReader<msg::TargetRequest>(
         bench_id_, [this](const msg::TargetRequest& message, const auto&) { OnTargetRequest(message); });
+    for (const std::string& line : bus::DescribeShmCleanup(participant_.shm_cleanup())) spdlog::info("{}", line);
     spdlog::info("{} controls, profiles {}, domain {}", core_.control_count(), participant_.profiles_file(),
                  common.domain_id);
   }

@@ -168,6 +168,7 @@ class PolarimeterService final : public Service {
           TraceHeaderLines(bench_.scenario(), bench_.chain(), bench_.target(), 1,
                            "dpc-polarimeter " + std::string(options.bench.lockstep ? "lockstep" : "real time")));
     }
+    for (const std::string& line : bus::DescribeShmCleanup(participant_.shm_cleanup())) spdlog::info("{}", line);
     spdlog::info("{}, {} controls, profiles {}, domain {}",
                  options.bench.lockstep ? "lockstep" : fmt::format("real time at {} Hz", options.bench.rate_hz),
                  bench_.control_count(), participant_.profiles_file(), common.domain_id);

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "dpc/bus/message_conversion.h"
+#include "dpc/bus/shm_segments.h"
 
 namespace dpc::bus {
 namespace fdds = eprosima::fastdds::dds;
@@ -241,6 +242,8 @@ BusParticipant::BusParticipant(const BusOptions& options, std::function<void(con
     qos.properties().properties().emplace_back(name, value);
   }
   secure_ = options.security.enabled();
+  // What a killed process left in /dev/shm delays the discovery of the one that replaces it.
+  if (ProfilesUseSharedMemory(profiles_file_)) shm_cleanup_ = RemoveStaleShmFiles();
   discovery_ = std::make_unique<DiscoveryListener>(std::move(on_peer));
   participant_ = factory->create_participant(options.domain_id, qos, discovery_.get(), fdds::StatusMask::none());
   if (participant_ == nullptr) {

@@ -36,6 +36,7 @@
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
+#include "dpc/bus/shm_segments.h"
 #include "dpc/bench/source_binding.h"
 #include "dpc/bus/topics.h"
 
@@ -406,6 +407,9 @@ class BusParticipant {
 
   eprosima::fastdds::dds::DomainParticipant* raw() const { return participant_; }
   const std::string& profiles_file() const { return profiles_file_; }
+  /// With a shared-memory profile: the stale Fast DDS files removed before the participant was
+  /// created (RemoveStaleShmFiles); all zero otherwise.
+  const StaleShmCleanup& shm_cleanup() const { return shm_cleanup_; }
   bool secure() const { return secure_; }
 
  private:
@@ -424,6 +428,7 @@ class BusParticipant {
 
   class DiscoveryListener;
   std::string profiles_file_;
+  StaleShmCleanup shm_cleanup_;
   bool secure_ = false;
   std::unique_ptr<DiscoveryListener> discovery_;  ///< remote writers' partitions
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
