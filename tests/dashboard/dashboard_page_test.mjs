@@ -71,7 +71,7 @@ let exitCode = 0;
 try {
   fs.mkdirSync(artifacts, { recursive: true });
   const common = ['--domain', domain];
-  start('driver', args.driver, common);
+  start('driver', args.driver, [...common, '--device-record', 'none']);  // nothing left in /dev/shm
   start('controller', args.controller, [...common, '--id', 'main', '--priority', '10']);
   start('polarimeter', args.polarimeter, [...common, '--rate-hz', '500']);
   const dashboard = start('dashboard', args.dpc,

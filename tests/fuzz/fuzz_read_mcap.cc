@@ -11,8 +11,17 @@
 #include "dpc/record/mcap.h"
 #include "fuzz_support.h"
 
+namespace {
+// The reader goes through a file: one per fuzzing process, removed when it exits.
+struct InputFile {
+  std::string path = "/dev/shm/dpc-fuzz-mcap-" + std::to_string(::getpid()) + ".mcap";
+  ~InputFile() { std::remove(path.c_str()); }
+};
+}  // namespace
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  static const std::string path = "/dev/shm/dpc-fuzz-mcap-" + std::to_string(::getpid()) + ".mcap";
+  static const InputFile input;
+  const std::string& path = input.path;
   std::FILE* file = std::fopen(path.c_str(), "wb");
   if (file == nullptr) return 0;
   std::fwrite(data, 1, size, file);

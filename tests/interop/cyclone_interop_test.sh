@@ -60,7 +60,8 @@ sed 's/^controller {$/controller {\n  initial_phi: 0.25 initial_phi: -0.5 initia
   "$(dirname "$FASTDDS_PROFILES")/../scenarios/bench_default.pbtxt" >"$SCENARIO"
 grep -q "initial_phi: 0.25" "$SCENARIO" || fail "could not write the scenario"
 
-"$DRIVER" "$SCENARIO" --domain "$DOMAIN" --bench-id "$BENCH" >"$WORK/driver.log" 2>&1 &
+"$DRIVER" "$SCENARIO" --domain "$DOMAIN" --bench-id "$BENCH" --device-record "$WORK/waveplates" \
+  >"$WORK/driver.log" 2>&1 &
 DRIVER_PID=$!
 
 # --- 1. Cyclone reads the Fast DDS topics --------------------------------------------------------
