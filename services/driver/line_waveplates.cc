@@ -280,15 +280,13 @@ void LineWaveplates::Run() {
       failure = Send(target, false);
       if (failure.empty()) {
         const double us = std::chrono::duration<double, std::micro>(Clock::now() - sent_at).count();
-        {
-          std::lock_guard<std::mutex> guard(mutex_);
-          apply_times_.Add(us);
-        }
+        lock.lock();
+        apply_times_.Add(us);
         // Not set again before the output settled: newer commands meanwhile are coalesced.
         if (device_.settling_s > 0) {
-          std::unique_lock<std::mutex> settling(mutex_);
-          wake_.wait_for(settling, std::chrono::duration<double>(device_.settling_s), [&] { return stop_; });
+          wake_.wait_for(lock, std::chrono::duration<double>(device_.settling_s), [&] { return stop_; });
         }
+        lock.unlock();
       }
     } else {
       // Idle: is the device still there, and does it still hold what it was set to?

@@ -52,7 +52,8 @@ std::optional<PolarimeterReading> InstrumentPolarimeter::Measure(int64_t now_ns,
     reply_ns = MonotonicNs();
     if (reply) query_times_.Add(static_cast<double>(reply_ns - query_ns) * 1e-3);
   }
-  const std::string& asked = device_.stream ? std::string("the stream") : device_.query;
+  static const std::string kStream = "the stream";
+  const std::string& asked = device_.stream ? kStream : device_.query;  // named in every failure
   if (!reply) {
     if (!link_.is_open()) {
       next_connect_ns_ = reply_ns + static_cast<int64_t>(backoff_s_ * 1e9);

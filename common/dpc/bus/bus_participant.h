@@ -36,8 +36,8 @@
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
-#include "dpc/bus/shm_segments.h"
 #include "dpc/bench/source_binding.h"
+#include "dpc/bus/shm_segments.h"
 #include "dpc/bus/topics.h"
 
 namespace dpc::bus {
