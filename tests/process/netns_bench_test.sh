@@ -56,6 +56,9 @@ ADDR_A="10.99.$X.1"
 ADDR_B="10.99.$X.2"
 DOMAIN=62
 RATE_HZ=${DPC_NETNS_RATE_HZ:-2000}
+# Secured, the three services take ~150 % of this 2-core machine's CPU at 2 kHz (every message
+# signed and encrypted): a busy neighbour then costs the loop tens of degrees. 1 kHz leaves room.
+[[ $CASE == secure_peers ]] && RATE_HZ=${DPC_NETNS_RATE_HZ:-1000}
 [[ $CASE == server ]] && DOMAIN=63
 [[ $CASE == secure_peers ]] && DOMAIN=60
 SERVER_PORT=11811
@@ -160,6 +163,17 @@ wait_for() {
   done
 }
 
+# wait_for_quietly SECONDS COMMAND...: as wait_for, but returns 1 on time-out instead of failing.
+wait_for_quietly() {
+  local limit=$1
+  shift
+  local end=$(( $(date +%s%N) + limit * 1000000000 ))
+  until "$@" >/dev/null 2>&1; do
+    (( $(date +%s%N) < end )) || return 1
+    sleep 0.02
+  done
+}
+
 # --- discovery server (case server) ------------------------------------------------------------
 if [[ $CASE == server ]]; then
   t0=$(date +%s%N)
@@ -180,6 +194,29 @@ fi
 run_in "$NS_A" "$WORK/profile_a.xml" "$WORK/driver.log" "$DRIVER" --domain "$DOMAIN" --device-record "$WORK/driver.record" "${SECURITY[@]}"
 t0=$(date +%s%N)
 run_in "$NS_B" "$WORK/profile_b.xml" "$WORK/controller.log" "$CONTROLLER" --domain "$DOMAIN" --id remote "${SECURITY[@]}"
+CONTROLLER_PID=$!
+# forget_pid PID: a service replaced on purpose (not "exited early").
+forget_pid() {
+  local kept=() pid
+  for pid in "${PIDS[@]}"; do [[ $pid == "$1" ]] || kept+=("$pid"); done
+  PIDS=("${kept[@]}")
+}
+# authenticated_by_driver NAME: the driver's log says its security handshake with NAME finished.
+authenticated_by_driver() { grep -q "participant authenticated: .*($1)" "$WORK/driver.log"; }
+if [[ $CASE == secure_peers ]]; then
+  # Fast DDS 2.9: the handshake of two participants can stall for good (both discovered, neither
+  # ever authenticated; see ARCHITECTURE.md). An operator's remedy is a restart of one of them:
+  # done once here, and said; a second stall fails.
+  if ! wait_for_quietly 15 grep -q "device: 3 stages" "$WORK/controller.log" &&
+     ! authenticated_by_driver dpc-controller/remote; then
+    echo "note: the driver's security handshake with the controller did not finish in 15 s (a Fast DDS 2.9 stall); restarting the controller once"
+    kill -TERM "$CONTROLLER_PID" 2>/dev/null || true
+    wait "$CONTROLLER_PID" || true
+    forget_pid "$CONTROLLER_PID"
+    mv "$WORK/controller.log" "$WORK/controller-stalled.log"
+    run_in "$NS_B" "$WORK/profile_b.xml" "$WORK/controller.log" "$CONTROLLER" --domain "$DOMAIN" --id remote "${SECURITY[@]}"
+  fi
+fi
 wait_for 30 "the controller (namespace B) to receive the device description from the driver (A)" \
   grep -q "device: 3 stages" "$WORK/controller.log"
 discovery_ms=$(( ($(date +%s%N) - t0) / 1000000 ))
@@ -195,11 +232,24 @@ if [[ $CASE == secure_peers ]]; then
   run_in "$NS_B" "$WORK/profile_b.xml" "$WORK/intruder.log" "$CONTROLLER" --domain "$DOMAIN" --id intruder --priority 100
 fi
 
-ip netns exec "$NS_A" env FASTRTPS_DEFAULT_PROFILES_FILE="$WORK/profile_a.xml" \
-  "$POLARIMETER" --domain "$DOMAIN" --rate-hz "$RATE_HZ" --run-s 6 --json "${SECURITY[@]}" \
-  >"$WORK/polarimeter.json" 2>"$WORK/polarimeter.log" &
-POL_PID=$!
-PIDS+=("$POL_PID")
+run_polarimeter() {
+  ip netns exec "$NS_A" env FASTRTPS_DEFAULT_PROFILES_FILE="$WORK/profile_a.xml" \
+    "$POLARIMETER" --domain "$DOMAIN" --rate-hz "$RATE_HZ" --run-s 6 --json "${SECURITY[@]}" \
+    >"$WORK/polarimeter.json" 2>"$WORK/polarimeter.log" &
+  POL_PID=$!
+  PIDS+=("$POL_PID")
+}
+run_polarimeter
+if [[ $CASE == secure_peers ]] &&
+   ! wait_for_quietly 15 authenticated_by_driver dpc-polarimeter/bench1; then
+  # The same stall between the polarimeter and the driver: the driver would never see a sample.
+  echo "note: the driver's security handshake with the polarimeter did not finish in 15 s (a Fast DDS 2.9 stall); restarting the polarimeter once"
+  kill -TERM "$POL_PID" 2>/dev/null || true
+  wait "$POL_PID" || true
+  forget_pid "$POL_PID"
+  mv "$WORK/polarimeter.log" "$WORK/polarimeter-stalled.log"
+  run_polarimeter
+fi
 wait "$POL_PID" || fail "dpc-polarimeter failed"
 SUMMARY=$(grep '^{' "$WORK/polarimeter.json" | tail -n 1)
 [[ -n $SUMMARY ]] || fail "no JSON summary from dpc-polarimeter"
@@ -227,16 +277,17 @@ fi
 # below 2°: the loop holds the target most of the time. The mean is bounded loosely (10°): on this
 # shared 2-core machine a process starved for 100 ms lets the scrambler move the light by 2 rad,
 # which adds a few degrees to the mean without anything wrong on the network.
-# Secured, every message is signed and encrypted: the loop latency grows by about half (README,
-# dpc_bus_benchmark --only security) and so does the error while locked: its median bound is 3°.
+# Secured, at 1 kHz (above), every message signed and encrypted: locked, the error is ~2.4°
+# (median 2.3-2.5° in runs on this machine, p99 4-4.6°); its median bound is 4°.
 P50_LIMIT_DEG=2
-[[ $CASE == secure_peers ]] && P50_LIMIT_DEG=3
+MEAN_NOTE_DEG=2
+[[ $CASE == secure_peers ]] && { P50_LIMIT_DEG=4; MEAN_NOTE_DEG=3.5; }
 echo "$SUMMARY" | jq -e --argjson limit "$P50_LIMIT_DEG" '.error_deg.p50 != null and .error_deg.p50 < $limit' >/dev/null ||
   fail "median error after lock is not below ${P50_LIMIT_DEG}°: $(echo "$SUMMARY" | jq -c .error_deg)"
 echo "$SUMMARY" | jq -e '.error_deg.mean != null and .error_deg.mean < 10' >/dev/null ||
   fail "mean error after lock is not below 10°: $(echo "$SUMMARY" | jq -c .error_deg)"
-if ! echo "$SUMMARY" | jq -e '.error_deg.mean < 2' >/dev/null; then
-  echo "note: mean error $(echo "$SUMMARY" | jq .error_deg.mean)° ≥ 2°: the loop lost the target for a while (CPU starvation?)"
+if ! echo "$SUMMARY" | jq -e --argjson note "$MEAN_NOTE_DEG" '.error_deg.mean < $note' >/dev/null; then
+  echo "note: mean error $(echo "$SUMMARY" | jq .error_deg.mean)° ≥ ${MEAN_NOTE_DEG}°: the loop lost the target for a while (CPU starvation?)"
 fi
 echo "$SUMMARY" | jq -e --argjson rate "$RATE_HZ" '.bench.published >= 3 * $rate' >/dev/null ||
   fail "the polarimeter published too few samples: $(echo "$SUMMARY" | jq -c .bench)"
