@@ -65,6 +65,37 @@ TEST_F(DpcCliTest, ShippedPaperScenariosLockAndKeepPhiBounded) {
   }
 }
 
+TEST_F(DpcCliTest, ShippedStressScenariosRecoverWithoutResets) {
+  // The lightning stroke (5.1 Mrad/s for 10 µs at 10 ms): felt (the error goes far above the
+  // lock threshold), no reset, φ bounded, and back below 40 dB within 1 ms (97 µs measured).
+  const Result lightning = Run("sim " + Scenario("stress_lightning") + " --json");
+  ASSERT_EQ(lightning.exit_code, 0) << lightning.err;
+  const auto l = nlohmann::json::parse(lightning.out);
+  EXPECT_GT(l["error_deg"]["max"].get<double>(), 90.0);
+  EXPECT_EQ(l["resets"], 0);
+  EXPECT_LT(l["error_deg"]["p50"].get<double>(), 1.0);
+  EXPECT_GE(l["recovery"]["stretches_above"].get<int>(), 1);
+  EXPECT_LT(l["recovery"]["longest_above_s"].get<double>(), 1e-3);
+  const double from_s = l["recovery"]["longest_above_from_s"].get<double>();
+  EXPECT_GE(from_s, 10e-3);  // the stroke's, not the lock-in's
+  EXPECT_LT(from_s, 10.1e-3);
+  for (const char* key : {"phi_min", "phi_max"}) {
+    for (const auto& v : l[key]) EXPECT_LT(std::abs(v.get<double>()), 3.0) << key;
+  }
+  // 2 Mrad/s deterministic rotation, 20 ms of it: tracked below 2° throughout.
+  const Result rotation = Run("sim " + Scenario("stress_rotation_2mrad") + " --duration-s 0.02 --json");
+  ASSERT_EQ(rotation.exit_code, 0) << rotation.err;
+  const auto r = nlohmann::json::parse(rotation.out);
+  EXPECT_LT(r["error_deg"]["max"].get<double>(), 2.0);
+  EXPECT_EQ(r["resets"], 0);
+  // The 1e9-sample run, 20 ms of it: the scenario loads and tracks (the whole run is a benchmark).
+  const Result scrambling = Run("sim " + Scenario("stress_scrambling_60krad_1e9") + " --duration-s 0.02 --json");
+  ASSERT_EQ(scrambling.exit_code, 0) << scrambling.err;
+  const auto c = nlohmann::json::parse(scrambling.out);
+  EXPECT_EQ(c["samples"], 1000000);
+  EXPECT_LT(c["error_deg"]["max"].get<double>(), 11.9);  // 0.208 rad
+}
+
 TEST_F(DpcCliTest, ThresholdedScenarioUsesTheNullSpaceOnlyPartOfTheTime) {
   const Result r = Run("sim " + Scenario("paper_fig5") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -121,6 +121,10 @@ nlohmann::ordered_json RunReportJson(const RunDescription& run, const Simulation
   j["first_lock_time_s"] = Optional(r.first_lock_time_s);
   j["excursions"] = r.excursions;
   j["threshold_crossings"] = r.threshold_crossings;
+  j["recovery"] = {{"threshold_deg", Number(RunStatistics::kRecoveryThresholdDeg)},
+                   {"stretches_above", r.recovery_stretches},
+                   {"longest_above_s", Number(r.longest_recovery_s)},
+                   {"longest_above_from_s", Number(r.longest_recovery_from_s)}};
   j["statistics_from_s"] = Number(r.statistics_start_s);
   j["statistics_to_s"] = Number(r.statistics_end_s);
   j["statistics_samples"] = r.statistics_samples;
@@ -190,6 +194,15 @@ std::string RunReportText(const RunDescription& run, const SimulationResult& res
                       r.statistics_start_s * 1e3, r.statistics_end_s * 1e3, r.statistics_samples);
   text += fmt::format("extinction mean {:.2f} dB, power-averaged {:.2f} dB\n", r.extinction_db_mean,
                       r.extinction_db_power_mean);
+  if (r.recovery_stretches == 0) {
+    text += fmt::format("recovery   never at or above {:.3f}° (40 dB) in the window\n",
+                        RunStatistics::kRecoveryThresholdDeg);
+  } else {
+    text += fmt::format("recovery   {} stretch{} at or above {:.3f}° (40 dB); the longest {:.3g} µs from {:.6g} ms\n",
+                        r.recovery_stretches, r.recovery_stretches == 1 ? "" : "es",
+                        RunStatistics::kRecoveryThresholdDeg, r.longest_recovery_s * 1e6,
+                        r.longest_recovery_from_s * 1e3);
+  }
   text += fmt::format("phi        min [{}]\n           max [{}]\n           p1  [{}]\n"
                       "           p99 [{}]\n",
                       FormatList(r.phi_min), FormatList(r.phi_max), FormatList(r.phi_p1),

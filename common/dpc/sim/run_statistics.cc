@@ -80,7 +80,7 @@ void RunStatistics::Flush() const {
     }
   }
   // In time order: lock tracking and the error window.
-  double window_error_deg[kBatch], window_leak[kBatch], window_raw_leak[kBatch];
+  double window_error_deg[kBatch], window_leak[kBatch], window_raw_leak[kBatch], window_t_s[kBatch];
   int window_count = 0;
   for (int i = 0; i < count; ++i) {
     const double t_s = pending_t_s_[i];
@@ -104,12 +104,14 @@ void RunStatistics::Flush() const {
     }
     if (window_open_) {
       window_end_s_ = t_s;
+      window_t_s[window_count] = t_s;
       window_error_deg[window_count] = error_rad[i] * kRadToDeg;
       window_leak[window_count] = std::max(leak[i], kLeakFloor);
       window_raw_leak[window_count] = leak[i];
       ++window_count;
     }
   }
+  TrackRecovery(window_error_deg, window_t_s, window_count);
   leak_log_sum_.AddBatch(window_leak, window_count);
   // Blocked sum: plain within the batch (even and odd window samples in two registers; an
   // array indexed by parity would chain through memory), compensated across batches.
@@ -132,6 +134,34 @@ void RunStatistics::Flush() const {
       phi_[c].AddBatch(pending_phi_.data() + c, count, phi_stride_);
     }
   }
+}
+
+void RunStatistics::TrackRecovery(const double* error_deg, const double* t_s, int count) const {
+  if (count == 0) return;
+  // Stretches change rarely (a few per thousand samples on the paper's scrambler): first an
+  // integer OR over the batch (it vectorizes) of "differs from the sample before", and the
+  // sample-by-sample pass only for a batch with a change in it.
+  int changes = (error_deg[0] >= kRecoveryThresholdDeg) != above_recovery_;
+  for (int i = 1; i < count; ++i) {
+    changes |= (error_deg[i] >= kRecoveryThresholdDeg) != (error_deg[i - 1] >= kRecoveryThresholdDeg);
+  }
+  if (changes == 0) return;
+  bool above = above_recovery_;
+  double since_s = above_recovery_since_s_;
+  for (int i = 0; i < count; ++i) {
+    const bool now_above = error_deg[i] >= kRecoveryThresholdDeg;
+    if (now_above == above) continue;
+    above = now_above;
+    if (above) {
+      since_s = t_s[i];
+      ++recovery_stretches_;
+    } else if (t_s[i] - since_s > longest_recovery_s_) {
+      longest_recovery_s_ = t_s[i] - since_s;
+      longest_recovery_from_s_ = since_s;
+    }
+  }
+  above_recovery_ = above;
+  above_recovery_since_s_ = since_s;
 }
 
 RunSummary RunStatistics::Summarize(int64_t samples, int64_t resets) const {
@@ -157,6 +187,14 @@ RunSummary RunStatistics::Summarize(int64_t samples, int64_t resets) const {
   if (first_lock_s_) s.first_lock_time_s = *first_lock_s_ - activation_s_;
   s.excursions = excursions_;
   s.threshold_crossings = threshold_crossings_;
+  s.recovery_stretches = recovery_stretches_;
+  s.longest_recovery_s = longest_recovery_s_;
+  s.longest_recovery_from_s = longest_recovery_from_s_;
+  // A stretch still above at the end lasts until the window's last sample.
+  if (above_recovery_ && window_end_s_ - above_recovery_since_s_ > s.longest_recovery_s) {
+    s.longest_recovery_s = window_end_s_ - above_recovery_since_s_;
+    s.longest_recovery_from_s = above_recovery_since_s_;
+  }
   for (const auto& h : phi_) {
     s.phi_min.push_back(h.count() ? h.min() : NAN);
     s.phi_max.push_back(h.count() ? h.max() : NAN);

@@ -18,6 +18,10 @@
 //                lock_time_s: the start of the last stretch that stays below the threshold until
 //                the end of the run (unset if the last sample is above it): on a long run with
 //                excursions that is the last relock, not the first lock.
+//   recovery     stretches of the statistics window with the error at or above the 40-dB
+//                threshold (leak 1e-4 through the polarizer: 2·asin(0.01) = 1.146°): how many, and
+//                the longest (from its first sample above to the first back below, or to the
+//                window's end): after a transient (a lightning stroke) the time back below 40 dB.
 //   controls     min, max, 1st and 99th percentiles of each applied φ_i, from activation on
 //   controller   fraction of updates with the null-space term active, failed and clamped
 //                updates, the smallest σ_min of the task Jacobian and the fraction of updates
@@ -53,6 +57,9 @@ struct RunSummary {
   std::optional<double> first_lock_time_s;
   int64_t excursions = 0;           ///< with hysteresis (see above)
   int64_t threshold_crossings = 0;  ///< every upward crossing after the first lock
+  int64_t recovery_stretches = 0;        ///< stretches at or above kRecoveryThresholdDeg
+  double longest_recovery_s = 0.0;       ///< the longest of them (0 if none)
+  double longest_recovery_from_s = NAN;  ///< its first sample's time (NaN if none)
   std::vector<double> phi_min, phi_max, phi_p1, phi_p99;
   int64_t updates = 0;  ///< controller updates (samples from activation on)
   double nullspace_active_fraction = 0.0;
@@ -67,6 +74,10 @@ struct RunSummary {
 
 class RunStatistics {
  public:
+  /// The error of a 40-dB leak (sin²(α/2) = 1e-4): the recovery statistics' threshold.
+  static constexpr double kRecoveryThresholdRad = 0.020000333348334228;  // 2·asin(0.01)
+  static constexpr double kRecoveryThresholdDeg = kRecoveryThresholdRad * 180.0 / M_PI;
+
   /// Samples are buffered and folded into the statistics this many at a time: independent
   /// square roots, arcsines and logarithms then overlap in the pipeline instead of lengthening
   /// each sample's dependency chain.
@@ -100,6 +111,8 @@ class RunStatistics {
  private:
   /// Folds the buffered samples into the statistics.
   void Flush() const;
+  /// The recovery stretches through `count` window samples (error in degrees, time).
+  void TrackRecovery(const double* error_deg, const double* t_s, int count) const;
 
   const Target& target_;
   bool point_target_;
@@ -136,6 +149,13 @@ class RunStatistics {
   mutable int64_t threshold_crossings_ = 0;
   mutable bool armed_ = false;  ///< the error fell below half the threshold since the last excursion
   double rearm_rad_;            ///< half the lock threshold
+
+  // Recovery (in the error window).
+  mutable bool above_recovery_ = false;
+  mutable double above_recovery_since_s_ = NAN;
+  mutable int64_t recovery_stretches_ = 0;
+  mutable double longest_recovery_s_ = 0.0;
+  mutable double longest_recovery_from_s_ = NAN;
 
   // Controls and controller.
   mutable std::vector<LogHistogram> phi_;

@@ -86,6 +86,36 @@ TEST(RunStatisticsTest, NoLockWhenTheRunEndsAboveThreshold) {
   EXPECT_TRUE(s.first_lock_time_s.has_value());
 }
 
+TEST(RunStatisticsTest, RecoveryStretchesAreTheTimesAtOrAboveFortyDecibels) {
+  // From 0.1 s: 0.5° (below 40 dB), then 2° for 0.3 s (a transient), below, 1.5° for 0.1 s, and
+  // 3° from 1.0 s to the end (0.2 s): three stretches, the longest the first (0.3 s from 0.2 s).
+  RunStatistics stats(kTarget, 2, 0.0, 10.0, 0.1);
+  const double errors_deg[] = {0.5, 0.5, 2, 2, 2, 0.5, 1.5, 0.5, 0.5, 0.5, 3, 3, 3};
+  for (int k = 0; k < 13; ++k) stats.AddSample(0.1 * k, At(errors_deg[k] * kDeg), Phi(0, 0));
+  const RunSummary r = stats.Summarize(13, 0);
+  EXPECT_NEAR(RunStatistics::kRecoveryThresholdDeg, 1.1459, 1e-4);
+  EXPECT_EQ(r.recovery_stretches, 3);
+  EXPECT_NEAR(r.longest_recovery_s, 0.3, 1e-12);
+  EXPECT_NEAR(r.longest_recovery_from_s, 0.2, 1e-12);
+
+  // The last stretch runs to the window's end: the longest when nothing before is as long.
+  RunStatistics tail(kTarget, 2, 0.0, 10.0, 0.0);
+  const double tail_deg[] = {0.5, 1.5, 0.5, 0.5, 2, 2, 2, 2};
+  for (int k = 0; k < 8; ++k) tail.AddSample(0.1 * k, At(tail_deg[k] * kDeg), Phi(0, 0));
+  const RunSummary t = tail.Summarize(8, 0);
+  EXPECT_EQ(t.recovery_stretches, 2);
+  EXPECT_NEAR(t.longest_recovery_s, 0.3, 1e-12);
+  EXPECT_NEAR(t.longest_recovery_from_s, 0.4, 1e-12);
+
+  // Never above: none, and no start.
+  RunStatistics calm(kTarget, 2, 0.0, 10.0, 0.0);
+  for (int k = 0; k < 5; ++k) calm.AddSample(0.1 * k, At(1.0 * kDeg), Phi(0, 0));
+  const RunSummary c = calm.Summarize(5, 0);
+  EXPECT_EQ(c.recovery_stretches, 0);
+  EXPECT_EQ(c.longest_recovery_s, 0.0);
+  EXPECT_TRUE(std::isnan(c.longest_recovery_from_s));
+}
+
 TEST(RunStatisticsTest, NeverLockedMeansNoErrorStatistics) {
   RunStatistics stats(kTarget, 2, 0.0, 1.0, std::nullopt);
   stats.AddSample(0.0, At(5 * kDeg), Phi(0, 0));
