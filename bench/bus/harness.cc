@@ -7,9 +7,14 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
+#include <thread>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "support/json_lines.h"
 
 namespace dpc::bus_benchmark {
 
@@ -76,6 +81,56 @@ Process& Services::Controller(const std::string& id, int priority, std::vector<s
 
 Process& Services::Polarimeter(std::vector<std::string> args) {
   return Start(DPC_POLARIMETER_BINARY, std::move(args), "polarimeter");
+}
+
+namespace {
+
+double Number(const nlohmann::json& value) { return value.is_number() ? value.get<double>() : NAN; }
+
+int64_t Count(const nlohmann::json& value) { return value.is_number() ? value.get<int64_t>() : -1; }
+
+}  // namespace
+
+RealTimeRun RunRealTimeBench(const BusBenchmarkHarness& harness, double rate_hz, double seconds,
+                             const std::string& label, std::vector<std::string> common_args) {
+  using namespace std::chrono_literals;
+  Services services(harness, label);
+  services.AddCommonArgs(std::move(common_args));
+  std::vector<Process*> processes = {&services.Driver(), &services.Controller("main", 0)};
+  std::this_thread::sleep_for(1s);  // discovery and, when secure, the handshakes
+  Process& polarimeter = services.Polarimeter({"--rate-hz", fmt::format("{}", rate_hz), "--json"});
+  processes.push_back(&polarimeter);
+  std::this_thread::sleep_for(2s);  // warm-up
+  double cpu_before = 0.0;
+  for (Process* p : processes) cpu_before += p->cpu_seconds();
+  const auto start = std::chrono::steady_clock::now();
+  std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
+  double cpu_after = 0.0;
+  for (Process* p : processes) cpu_after += p->cpu_seconds();
+  const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  polarimeter.Stop(10s);
+  RealTimeRun run;
+  const nlohmann::json report = testing::LastJsonLine(polarimeter.Log());
+  if (!report.is_object()) return run;
+  const auto& bench = report["bench"];
+  run.ok = true;
+  run.achieved_hz = Number(bench["achieved_rate_hz"]);
+  run.overruns = Count(bench["overruns"]);
+  run.state_deadline_misses = Count(bench["state_deadline_misses"]);
+  const auto& loop = bench["loop_latency_us"]["sample_to_state_received"];
+  run.loop_p50_us = Number(loop["p50"]);
+  run.loop_p99_us = Number(loop["p99"]);
+  run.error_mean_deg = Number(report["error_deg"]["mean"]);
+  run.cpu_us_per_sample = (cpu_after - cpu_before) * 1e6 / (run.achieved_hz * elapsed_s);
+  return run;
+}
+
+std::string Row(const RealTimeRun& r) {
+  if (!r.ok) return "no report";
+  return fmt::format("achieved {:8.1f} Hz ({} overruns, {} state deadline misses), loop p50 {:7.1f} µs p99 {:8.1f} µs, "
+                     "CPU {:6.1f} µs/sample, error mean {:.2f}°",
+                     r.achieved_hz, r.overruns, r.state_deadline_misses, r.loop_p50_us, r.loop_p99_us,
+                     r.cpu_us_per_sample, r.error_mean_deg);
 }
 
 }  // namespace dpc::bus_benchmark

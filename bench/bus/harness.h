@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -71,5 +72,22 @@ class Services {
   std::vector<std::string> common_args_;
   std::vector<std::unique_ptr<Process>> processes_;
 };
+
+/// One real-time run of the bench (driver, one controller "main", polarimeter at `rate_hz`):
+/// what the polarimeter reported and the CPU time of the three services per sample.
+struct RealTimeRun {
+  bool ok = false;
+  double achieved_hz = NAN, loop_p50_us = NAN, loop_p99_us = NAN, cpu_us_per_sample = NAN, error_mean_deg = NAN;
+  int64_t overruns = 0, state_deadline_misses = 0;
+};
+
+/// Starts the bench with `common_args` (e.g. --security-dir DIR) and the profiles file the
+/// environment names, waits 1 s for discovery (and handshakes), starts the polarimeter at
+/// `rate_hz`, warms up for 2 s, measures for `seconds`; logs get `label`.
+RealTimeRun RunRealTimeBench(const BusBenchmarkHarness& harness, double rate_hz, double seconds,
+                             const std::string& label, std::vector<std::string> common_args = {});
+
+/// "achieved … Hz (… overruns), loop p50 … µs p99 … µs, CPU … µs/sample, error mean …°".
+std::string Row(const RealTimeRun& run);
 
 }  // namespace dpc::bus_benchmark

@@ -39,6 +39,9 @@
 //   security the same bench open and with DDS Security (a PKI from make-bench-pki.sh) at 2,
 //            10 and 20 kHz, alternating: loop latency p50/p99, CPU of the three services per
 //            sample, rate achieved, error
+//   transport the same bench over the shipped UDP profile, UDP without deadlines, SHM + UDP and
+//            SHM + UDP without deadlines at 2 and 5 kHz, alternating: rate, overruns, missed
+//            state deadlines, loop latency p50/p99, CPU of the three services per sample
 //
 // The raw references' far sides are this binary again, in the internal modes --pong, --relay,
 // --command-echo and --raw-owner.
@@ -68,7 +71,7 @@ int main(int argc, char** argv) {
   app.add_option("--raw-owner", raw_owner, "(internal) a raw EXCLUSIVE writer of this strength");
   int domain = 30;
   app.add_option("--domain", domain, "DDS domain (loopback profile)")->check(CLI::Range(0, 232));
-  app.add_option("--only", only, "One section: raw,loop,rate,failover,tracking,record,instruments,memory,security");
+  app.add_option("--only", only, "One section: raw,loop,rate,failover,tracking,record,instruments,memory,security,transport");
   CLI11_PARSE(app, argc, argv);
 
   // The internal modes: the far sides of the raw references, started by the sections.
@@ -101,6 +104,10 @@ int main(int argc, char** argv) {
   }
   if (want("security")) {
     bench::RunSecuritySection(harness);
+    std::fflush(stdout);
+  }
+  if (want("transport")) {
+    bench::RunTransportSection(harness);
     std::fflush(stdout);
   }
   if (want("record")) {
