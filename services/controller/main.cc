@@ -74,8 +74,10 @@ class ControllerService final : public Service {
         bench_id_, [this](const msg::Target& message, const auto& info) { OnTarget(message, info); });
     states_ = participant_.MakeReader<msg::WaveplateState>(
         bench_id_, [this](const msg::WaveplateState& message, const auto& info) { OnState(message, info); });
+    // The status reports the sample topic's missed deadlines: this reader requests it.
     samples_ = participant_.MakeReader<msg::StokesSample>(
-        bench_id_, [this](const msg::StokesSample& message, const auto& info) { OnSample(message, info); });
+        bench_id_, [this](const msg::StokesSample& message, const auto& info) { OnSample(message, info); },
+        bus::DeadlineWatch::kOn);
     for (const std::string& line : bus::DescribeShmCleanup(participant_.shm_cleanup())) spdlog::info("{}", line);
     spdlog::info("law {}, priority {}, profiles {}, domain {}", MethodName(core_settings_.controller.method),
                  core_settings_.priority, participant_.profiles_file(), common.domain_id);

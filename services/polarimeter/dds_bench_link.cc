@@ -31,8 +31,10 @@ DdsBenchLink::DdsBenchLink(bus::BusParticipant* participant, int control_count, 
       spdlog::warn("no dpc_bench_summary ({}); make-bench-pki.sh signs the permissions that grant it", e.what());
     }
   }
+  // The bench's report counts the state topic's missed deadlines: this reader requests it.
   states_ = participant->MakeReader<msg::WaveplateState>(
-      bench_id, [this](const msg::WaveplateState& state, const auto& info) { OnState(state, bus::SourceOf(info)); });
+      bench_id, [this](const msg::WaveplateState& state, const auto& info) { OnState(state, bus::SourceOf(info)); },
+      bus::DeadlineWatch::kOn);
   targets_ = participant->MakeReader<msg::Target>(
       bench_id, [this](const msg::Target& target, const auto& info) { OnTarget(target, bus::SourceOf(info)); });
 }

@@ -3,9 +3,9 @@
 //
 // | topic                  | type               | writer(s)            | QoS (deploy/fastdds/*.xml)        |
 // |------------------------|--------------------|----------------------|-----------------------------------|
-// | dpc_stokes_sample      | StokesSample       | polarimeter          | reliable, keep last 1, deadline   |
-// | dpc_waveplate_command  | WaveplateCommand   | controllers          | reliable, keep last 1, deadline   |
-// | dpc_waveplate_state    | WaveplateState     | driver               | reliable, keep last 1, deadline   |
+// | dpc_stokes_sample      | StokesSample       | polarimeter          | best effort, keep last 1, deadline|
+// | dpc_waveplate_command  | WaveplateCommand   | controllers          | best effort, keep last 1, deadline|
+// | dpc_waveplate_state    | WaveplateState     | driver               | best effort, keep last 1, deadline|
 // | dpc_controller_status  | ControllerStatus   | controllers          | reliable, keep last 1, deadline   |
 // | dpc_device_description | DeviceDescription  | driver               | reliable, transient local         |
 // | dpc_target             | Target             | driver               | reliable, transient local         |
@@ -14,6 +14,7 @@
 // | dpc_bench_summary      | BenchSummary       | polarimeter          | reliable, keep last 1, deadline   |
 //
 // Every profile is named "<topic>.writer" / "<topic>.reader"; data-sharing is off in all of them.
+// Writers offer the profile's deadline; a reader requests it only with DeadlineWatch::kOn.
 //
 // Partitions: every topic of bench B lives in the DDS partition "dpc.B", except the controllers'
 // commands: controller C writes in "dpc.B.controller.C", the driver reads "dpc.B.controller.*".

@@ -1,6 +1,6 @@
 // BusParticipant: profiles resolution, participants and typed readers and writers on the
 // loopback-only profile. Every participant here uses deploy/fastdds/loopback.xml and a DDS
-// domain of 64–69 (this file's share of the tests' range 60–79), so nothing leaves the host and
+// domain of 64–70 (this file's share of the tests' range 60–79), so nothing leaves the host and
 // no other test's traffic meets these.
 #include "dpc/bus/bus_participant.h"
 
@@ -34,6 +34,7 @@ constexpr int kOtherBenchDomain = 65;
 constexpr int kParticipantDomain = 66;
 constexpr int kPartitionDomain = 67;
 constexpr int kInstancesDomain = 68;
+constexpr int kDeadlineDomain = 70;
 constexpr auto kDiscoveryTimeout = 10s;
 
 msg::StokesSample Sample(const std::string& bench_id, uint64_t sequence) {
@@ -152,6 +153,31 @@ TEST_F(BusParticipantTest, AWriterAndAReaderInTwoParticipantsExchangeASample) {
   EXPECT_EQ(samples[0].sample_time_ns(), 700'000);
   EXPECT_EQ(samples[0].s_out(), sample.s_out());
   EXPECT_EQ(reader->counters().other_benches.load(), 0u);
+}
+
+TEST_F(BusParticipantTest, OnlyAReaderThatWatchesTheDeadlineRequestsItAndCountsItsMisses) {
+  BusParticipant publishing(Options(kDeadlineDomain, "dpc_bus_test_writer"));
+  BusParticipant subscribing(Options(kDeadlineDomain, "dpc_bus_test_reader"));
+  auto ignore = [](const msg::StokesSample&, const eprosima::fastdds::dds::SampleInfo&) {};
+  auto quiet = subscribing.MakeReader<msg::StokesSample>("bench1", ignore);
+  auto watching = subscribing.MakeReader<msg::StokesSample>("bench1", ignore, DeadlineWatch::kOn);
+  auto writer = publishing.MakeWriter<msg::StokesSample>("bench1");
+  // Both match the writer, which offers the profile's 20 ms.
+  ASSERT_TRUE(Eventually([&] {
+    return writer->matched_readers() == 2 && quiet->counters().matched_writers == 1 &&
+           watching->counters().matched_writers == 1;
+  }, kDiscoveryTimeout));
+  eprosima::fastdds::dds::DataReaderQos qos;
+  ASSERT_EQ(quiet->raw()->get_qos(qos), ReturnCode_t::RETCODE_OK);
+  EXPECT_EQ(qos.deadline().period, eprosima::fastrtps::c_TimeInfinite);
+  ASSERT_EQ(watching->raw()->get_qos(qos), ReturnCode_t::RETCODE_OK);
+  EXPECT_EQ(qos.deadline().period, eprosima::fastrtps::Duration_t(0, 20'000'000));
+  // One sample, then silence for many periods: only the watching reader misses deadlines.
+  ASSERT_TRUE(Eventually([&] {
+    return writer->Write(Sample("bench1", 1)) && quiet->counters().samples >= 1 && watching->counters().samples >= 1;
+  }, kDiscoveryTimeout));
+  EXPECT_TRUE(Eventually([&] { return watching->counters().deadline_misses >= 2; }, 5s));
+  EXPECT_EQ(quiet->counters().deadline_misses.load(), 0u);
 }
 
 TEST_F(BusParticipantTest, PeerEventsNameAParticipantWhenItArrivesAndWhenItLeaves) {
