@@ -133,4 +133,12 @@ std::string Row(const RealTimeRun& r) {
                      r.cpu_us_per_sample, r.error_mean_deg);
 }
 
+std::string Change(const RealTimeRun& base, const RealTimeRun& run) {
+  return fmt::format("loop p50 {:+.0f} %, p99 {:+.0f} %, CPU per sample {:+.0f} %, rate {:+.1f} %",
+                     100.0 * (run.loop_p50_us / base.loop_p50_us - 1.0),
+                     100.0 * (run.loop_p99_us / base.loop_p99_us - 1.0),
+                     100.0 * (run.cpu_us_per_sample / base.cpu_us_per_sample - 1.0),
+                     100.0 * (run.achieved_hz / base.achieved_hz - 1.0));
+}
+
 }  // namespace dpc::bus_benchmark

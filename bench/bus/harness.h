@@ -90,4 +90,7 @@ RealTimeRun RunRealTimeBench(const BusBenchmarkHarness& harness, double rate_hz,
 /// "achieved … Hz (… overruns), loop p50 … µs p99 … µs, CPU … µs/sample, error mean …°".
 std::string Row(const RealTimeRun& run);
 
+/// "loop p50 +…%, p99 +…%, CPU per sample +…%, rate +…%": `run` against `base` (both ok).
+std::string Change(const RealTimeRun& base, const RealTimeRun& run);
+
 }  // namespace dpc::bus_benchmark

@@ -39,9 +39,10 @@
 //   security the same bench open and with DDS Security (a PKI from make-bench-pki.sh) at 2,
 //            10 and 20 kHz, alternating: loop latency p50/p99, CPU of the three services per
 //            sample, rate achieved, error
-//   transport the same bench over the shipped UDP profile, UDP without deadlines, SHM + UDP and
-//            SHM + UDP without deadlines at 2 and 5 kHz, alternating: rate, overruns, missed
-//            state deadlines, loop latency p50/p99, CPU of the three services per sample
+//   transport the same bench over the shipped UDP profile, UDP without deadlines, UDP with the
+//            writers' deadlines only, SHM + UDP and SHM + UDP without deadlines at 2 and 5 kHz,
+//            alternating: rate, overruns, missed state deadlines, loop latency p50/p99, CPU of
+//            the three services per sample
 //
 // The raw references' far sides are this binary again, in the internal modes --pong, --relay,
 // --command-echo and --raw-owner.

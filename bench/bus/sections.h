@@ -25,8 +25,9 @@ void RunTrackingSection(const BusBenchmarkHarness& harness);
 /// AES-GCM-GMAC) side by side: loop latency, CPU per sample, sustained rate
 /// (security_section.cc).
 void RunSecuritySection(const BusBenchmarkHarness& harness);
-/// transport: the bench over the shipped UDP profile, without deadlines, over SHM, and over SHM
-/// without deadlines, side by side: rate, loop latency, CPU per sample (transport_section.cc).
+/// transport: the bench over the shipped UDP profile, without deadlines, with the writers'
+/// deadlines only, over SHM, and over SHM without deadlines, side by side: rate, loop latency,
+/// CPU per sample (transport_section.cc).
 void RunTransportSection(const BusBenchmarkHarness& harness);
 /// record: `dpc record` of a real-time bench at 2 and 10 kHz: the recorder's CPU, samples kept
 /// and missing (record_section.cc).

@@ -37,11 +37,7 @@ void RunSecuritySection(const BusBenchmarkHarness& harness) {
       fmt::print("  {:5.0f} Hz  open:   {}\n", rate_hz, Row(open));
       fmt::print("  {:5.0f} Hz  secure: {}\n", rate_hz, Row(secure));
       if (open.ok && secure.ok) {
-        fmt::print("  {:5.0f} Hz  cost: loop p50 {:+.0f} %, p99 {:+.0f} %, CPU per sample {:+.0f} %, rate {:+.1f} %\n",
-                   rate_hz, 100.0 * (secure.loop_p50_us / open.loop_p50_us - 1.0),
-                   100.0 * (secure.loop_p99_us / open.loop_p99_us - 1.0),
-                   100.0 * (secure.cpu_us_per_sample / open.cpu_us_per_sample - 1.0),
-                   100.0 * (secure.achieved_hz / open.achieved_hz - 1.0));
+        fmt::print("  {:5.0f} Hz  cost: {}\n", rate_hz, Change(open, secure));
       }
     }
   }

@@ -1,9 +1,9 @@
 // The transport section of dpc_bus_benchmark: the same real-time bench (driver, one controller,
-// polarimeter) under four variants of the loopback profile, alternating in rounds, at rates the
+// polarimeter) under five variants of the loopback profile, alternating in rounds, at rates the
 // machine holds: UDP on 127.0.0.1 as shipped (deploy/fastdds/loopback.xml); the same without
-// any DEADLINE QoS (what the deadlines cost); shared memory listed first beside UDP (same-host
-// participants meet over SHM, tools of other vendors over UDP); and SHM without deadlines;
-// and UDP with the deadlines of the writers only (readers request none: where the cost is).
+// any DEADLINE QoS (what the deadlines cost); UDP with the deadlines of the writers only
+// (readers request none: where the cost is); shared memory listed first beside UDP (same-host
+// participants meet over SHM, tools of other vendors over UDP); and SHM without deadlines.
 // Each row: the rate achieved, overruns, missed state deadlines, the loop latency (sample
 // published → state back at the polarimeter) and the CPU time of the three services per sample.
 // The variants are written into the run's log directory; the services take them through
@@ -27,34 +27,17 @@ struct Variant {
   std::string path;
 };
 
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-/// `xml` without its <deadline>…</deadline> elements (each on one line in loopback.xml).
-std::string WithoutDeadlines(const std::string& xml) {
-  std::istringstream lines(xml);
-  std::string out;
-  for (std::string line; std::getline(lines, line);) {
-    if (line.find("<deadline>") != std::string::npos) continue;
-    out += line + "\n";
-  }
-  return out;
-}
-
-/// `xml` without the <deadline> elements of its readers (the writers still offer theirs: a
-/// reader that requests none matches a writer that offers one, not the other way round).
-std::string WithoutReaderDeadlines(const std::string& xml) {
+/// `xml` without its <deadline> elements (each on one line in loopback.xml): every one, or with
+/// `readers_only` those of the readers (the writers still offer theirs: a reader that requests
+/// none matches a writer that offers one, not the other way round).
+std::string WithoutDeadlines(const std::string& xml, bool readers_only = false) {
   std::istringstream lines(xml);
   std::string out;
   bool in_reader = false;
   for (std::string line; std::getline(lines, line);) {
     if (line.find("<data_reader") != std::string::npos) in_reader = true;
     if (line.find("</data_reader>") != std::string::npos) in_reader = false;
-    if (in_reader && line.find("<deadline>") != std::string::npos) continue;
+    if ((in_reader || !readers_only) && line.find("<deadline>") != std::string::npos) continue;
     out += line + "\n";
   }
   return out;
@@ -101,7 +84,7 @@ void RunTransportSection(const BusBenchmarkHarness& harness) {
   const double seconds = harness.quick ? 5.0 : 20.0;
   const int rounds = harness.quick ? 1 : 3;
   const std::string shipped = std::string(DPC_SOURCE_DIR) + "/deploy/fastdds/loopback.xml";
-  const std::string xml = ReadText(shipped);
+  const std::string xml = testing::Slurp(shipped);
   const std::string shm = WithSharedMemory(xml);
   if (xml.empty() || shm.empty()) {
     fmt::print("transport: cannot read or extend {}\n", shipped);
@@ -113,7 +96,7 @@ void RunTransportSection(const BusBenchmarkHarness& harness) {
                                    {"SHM + UDP", harness.log_dir + "/shm.xml"},
                                    {"SHM + UDP, no deadlines", harness.log_dir + "/shm-no-deadlines.xml"}};
   std::ofstream(variants[1].path) << WithoutDeadlines(xml);
-  std::ofstream(variants[2].path) << WithoutReaderDeadlines(xml);
+  std::ofstream(variants[2].path) << WithoutDeadlines(xml, /*readers_only=*/true);
   std::ofstream(variants[3].path) << shm;
   std::ofstream(variants[4].path) << WithoutDeadlines(shm);
   fmt::print("transport: the bench over five variants of the loopback profile, {:.0f} s per run, {} round(s), "
@@ -131,12 +114,7 @@ void RunTransportSection(const BusBenchmarkHarness& harness) {
       const RealTimeRun& base = runs[0];
       for (size_t v = 1; v < runs.size(); ++v) {
         if (!base.ok || !runs[v].ok) continue;
-        fmt::print("  {:5.0f} Hz  {:24} against UDP (shipped): loop p50 {:+.0f} %, p99 {:+.0f} %, CPU per sample "
-                   "{:+.0f} %, rate {:+.1f} %\n",
-                   rate_hz, variants[v].name, 100.0 * (runs[v].loop_p50_us / base.loop_p50_us - 1.0),
-                   100.0 * (runs[v].loop_p99_us / base.loop_p99_us - 1.0),
-                   100.0 * (runs[v].cpu_us_per_sample / base.cpu_us_per_sample - 1.0),
-                   100.0 * (runs[v].achieved_hz / base.achieved_hz - 1.0));
+        fmt::print("  {:5.0f} Hz  {:24} against UDP (shipped): {}\n", rate_hz, variants[v].name, Change(base, runs[v]));
       }
     }
   }

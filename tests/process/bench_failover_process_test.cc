@@ -131,7 +131,7 @@ TEST_F(BenchFailoverTest, KillNineOfTheObeyedControllerHandsControlToTheStandby)
     for (const auto& [reason, count] : reasons) out << "\n  " << count << " × " << reason;
     f.during = out.str();
     return f;
-  }; 
+  };
   std::optional<Failover> f = kill_and_measure("primary");
   ASSERT_TRUE(f.has_value()) << Logs();
   std::printf("failover gap after kill -9: %.2f ms, step at the switch %.4f\n", f->gap_ms, f->switch_step);
@@ -139,7 +139,7 @@ TEST_F(BenchFailoverTest, KillNineOfTheObeyedControllerHandsControlToTheStandby)
     // Said, then measured once more on the same bench: one long gap (seen once in CI, 2.3 s,
     // cause unknown, not reproduced in 40 local runs) is reported with what the driver said in
     // it; a driver slow to switch fails twice.
-    std::printf("the gap exceeds %.0f ms; in it: %s\n---- driver log\n%s\nmeasuring once more\n", kGapLimitMs,
+    std::printf("the gap exceeds %.0f ms; in it: %s\n---- the services' logs\n%s\nmeasuring once more\n", kGapLimitMs,
                 f->during.c_str(), Logs().c_str());
     f = kill_and_measure("primary2");
     ASSERT_TRUE(f.has_value()) << Logs();

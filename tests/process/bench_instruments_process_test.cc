@@ -155,7 +155,7 @@ class BenchInstrumentsTest : public BenchFixture {
     const double at_resume = MaxErrorDeg(resumed_ns - 50'000'000, resumed_ns);
     const double after = MaxErrorDeg(resumed_ns, resumed_ns + 300'000'000);
     // Until the first correction lands (the loop's latency: a few ms on a loaded machine) the
-    // input keeps turning at the scrambler's 20 rad/s (bench_default.pbtxt): 5 ms are 5.7°. A
+    // input keeps turning at the emulator's 20 rad/s (emulator_epc.pbtxt): 5 ms are 5.7°. A
     // bump (a resume from another φ) is tens of degrees. Seen: a rise of 2.03° from 143.77°.
     constexpr double kDriftUntilTheFirstCorrectionDeg = 20.0 * 5e-3 * 180.0 / M_PI;
     if (device_kept_its_voltages) {

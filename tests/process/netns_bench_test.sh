@@ -193,8 +193,11 @@ fi
 # --- the bench: driver in A, controller in B, then the polarimeter in A ------------------------
 run_in "$NS_A" "$WORK/profile_a.xml" "$WORK/driver.log" "$DRIVER" --domain "$DOMAIN" --device-record "$WORK/driver.record" "${SECURITY[@]}"
 t0=$(date +%s%N)
-run_in "$NS_B" "$WORK/profile_b.xml" "$WORK/controller.log" "$CONTROLLER" --domain "$DOMAIN" --id remote "${SECURITY[@]}"
-CONTROLLER_PID=$!
+run_controller() {
+  run_in "$NS_B" "$WORK/profile_b.xml" "$WORK/controller.log" "$CONTROLLER" --domain "$DOMAIN" --id remote "${SECURITY[@]}"
+  CONTROLLER_PID=$!
+}
+run_controller
 # forget_pid PID: a service replaced on purpose (not "exited early").
 forget_pid() {
   local kept=() pid
@@ -214,7 +217,7 @@ if [[ $CASE == secure_peers ]]; then
     wait "$CONTROLLER_PID" || true
     forget_pid "$CONTROLLER_PID"
     mv "$WORK/controller.log" "$WORK/controller-stalled.log"
-    run_in "$NS_B" "$WORK/profile_b.xml" "$WORK/controller.log" "$CONTROLLER" --domain "$DOMAIN" --id remote "${SECURITY[@]}"
+    run_controller
   fi
 fi
 wait_for 30 "the controller (namespace B) to receive the device description from the driver (A)" \
