@@ -15,7 +15,7 @@ constexpr double kTolerance = 1e-15;
 // Every field of README.md's "dpc sim output" table.
 const char* const kReadmeResultFields[] = {
     "error_deg", "extinction_db_mean", "extinction_db_power_mean", "lock_time_s",
-    "first_lock_time_s", "excursions", "threshold_crossings", "statistics_from_s", "statistics_to_s",
+    "first_lock_time_s", "excursions", "threshold_crossings", "recovery", "statistics_from_s", "statistics_to_s",
     "statistics_samples", "phi_min", "phi_max", "phi_p1", "phi_p99",
     "nullspace_active_fraction", "resets", "failed_updates", "rank_deficient_updates",
     "clamped_updates", "sigma_min_min", "near_singular_fraction", "samples", "samples_per_s"};
@@ -215,6 +215,8 @@ TEST_F(JsonReportTest, TextNamesScenarioMethodAndLoop) {
   EXPECT_NE(text.find("fast loop"), std::string::npos) << text;
   EXPECT_NE(text.find("null-space step"), std::string::npos) << text;
   EXPECT_NE(text.find("10000 samples"), std::string::npos) << text;
+  // The paper's ~5° error sits above the 40-dB line: the recovery line gives its longest stretch.
+  EXPECT_NE(text.find("at or above 1.146° (40 dB); the longest"), std::string::npos) << text;
 }
 
 TEST_F(JsonReportTest, TextNamesTheGeneralLoopAndANeverLockingRun) {
@@ -232,6 +234,7 @@ TEST_F(JsonReportTest, TextNamesTheGeneralLoopAndANeverLockingRun) {
   EXPECT_NE(text.find("measured loop"), std::string::npos) << text;
   EXPECT_NE(text.find("general loop"), std::string::npos) << text;
   EXPECT_NE(text.find("lock       never"), std::string::npos) << text;
+  EXPECT_NE(text.find("recovery   never at or above 1.146° (40 dB) in the window"), std::string::npos) << text;
   EXPECT_EQ(text.find("null-space step"), std::string::npos) << text;  // pinv has none
 }
 
