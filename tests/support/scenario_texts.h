@@ -158,6 +158,14 @@ inline void ExpectSameMap(const ControlMapConfig& a, const ControlMapConfig& b) 
   EXPECT_EQ(a.coefficients_rad, b.coefficients_rad);
   EXPECT_EQ(a.table_control, b.table_control);
   EXPECT_EQ(a.table_angle_rad, b.table_angle_rad);
+  EXPECT_EQ(a.condition, b.condition);
+  EXPECT_EQ(a.operating_point, b.operating_point);
+  ASSERT_EQ(a.condition_tables.size(), b.condition_tables.size());
+  for (size_t i = 0; i < a.condition_tables.size(); ++i) {
+    EXPECT_EQ(a.condition_tables[i].condition, b.condition_tables[i].condition);
+    EXPECT_EQ(a.condition_tables[i].control, b.condition_tables[i].control);
+    EXPECT_EQ(a.condition_tables[i].angle_rad, b.condition_tables[i].angle_rad);
+  }
 }
 
 inline void ExpectSameAngle(const StageAngleConfig& a, const StageAngleConfig& b) {
@@ -166,6 +174,39 @@ inline void ExpectSameAngle(const StageAngleConfig& a, const StageAngleConfig& b
   ExpectSameMap(a.map, b.map);
   ExpectSameRange(a.range, b.range);
 }
+
+/// Maps measured at several conditions: tables keyed by temperature (two grids), and by wavelength
+/// on an adjustable-axis stage's orientation.
+constexpr const char* kConditionTablesText = R"pb(
+name: "tables-by-condition"
+stages {
+  axis: S1
+  map {
+    tables_by_condition {
+      operating_temperature_c: 30
+      tables { temperature_c: 15 table { control: [ -1, 0, 1 ] angle_rad: [ -3, 0, 3 ] } }
+      tables { temperature_c: 35 table { control: [ -1, 0.5, 1 ] angle_rad: [ -3.2, 1.6, 3.2 ] } }
+    }
+  }
+}
+stages { axis: S3 }
+stages {
+  adjustable_axis {
+    retardance { fixed_rad: 1.5707963267948966 }
+    orientation {
+      controlled {
+        map {
+          tables_by_condition {
+            operating_wavelength_nm: 1550
+            tables { wavelength_nm: 1500 table { control: [ 0, 1 ] angle_rad: [ 0, 2 ] } }
+            tables { wavelength_nm: 1600 table { control: [ 0, 1 ] angle_rad: [ 0, 1.8 ] } }
+          }
+        }
+      }
+    }
+  }
+}
+)pb";
 
 /// Real instruments: a serial EPC with every field, a TCP polarimeter measuring both SOPs.
 constexpr const char* kInstrumentsText = R"pb(

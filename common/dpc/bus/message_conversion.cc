@@ -6,17 +6,21 @@
 
 #include <fmt/format.h>
 
+#include "dpc/config/scenario_builders.h"
 #include "dpc/config/scenario_validation.h"
 
 namespace dpc::bus {
 namespace {
 
-msg::ControlMap MapMessage(const ControlMapConfig& map) {
+msg::ControlMap MapMessage(const ControlMapConfig& configured) {
+  // Tables by condition travel as the table they stand for at the operating point.
+  const ControlMapConfig map = ResolveConditionTables(configured);
   msg::ControlMap out;
   switch (map.kind) {
     case ControlMapConfig::Kind::kLinear: out.kind(msg::MAP_LINEAR); break;
     case ControlMapConfig::Kind::kPolynomial: out.kind(msg::MAP_POLYNOMIAL); break;
-    case ControlMapConfig::Kind::kTable: out.kind(msg::MAP_TABLE); break;
+    case ControlMapConfig::Kind::kTable:
+    case ControlMapConfig::Kind::kTablesByCondition: out.kind(msg::MAP_TABLE); break;
   }
   out.rad_per_unit(map.rad_per_unit);
   out.offset_rad(map.offset_rad);

@@ -2,7 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <tuple>
+
 #include "dpc/cli/command_line.h"
+#include "dpc/config/scenario_builders.h"
 #include "dpc/config/scenario_error.h"
 
 namespace dpc::cli {
@@ -46,6 +49,11 @@ void ScenarioOverrides::AddTo(CLI::App& app) {
   app.add_option("--rate-rad-per-s", rate_rad_per_s,
                  "Input rotation rate of the scrambler / constant rotation (rad/s)");
   app.add_flag("--static", static_input, "Hold the input SOP still (no disturbances)");
+  app.add_option("--operating-temperature-c", operating_temperature_c,
+                 "The operating point of every map keyed by temperature (tables by condition, e.g. from "
+                 "dpc calibrate --temperatures-c)");
+  app.add_option("--operating-wavelength-nm", operating_wavelength_nm,
+                 "The operating point of every map keyed by wavelength (dpc calibrate --wavelengths-nm)");
   app.add_option("--duration-s", duration_s, "Simulated time (s)");
   app.add_option("--delay-s", delay_s, "Loop delay (s), a whole number of samples");
   app.add_option("--sample-rate-hz", sample_rate_hz, "Sample rate (Hz)");
@@ -157,6 +165,35 @@ void ScenarioOverrides::Apply(ScenarioConfig* s) const {
     if (gradient_projection) {
       s->controller.nullspace_criterion = NullspaceCriterion::kRange;
       field_to_flag_["controller.nullspace_criterion"] = "--range";
+    }
+  }
+  for (const auto& [point, condition, flag] :
+       {std::tuple{operating_temperature_c, ControlMapConfig::Condition::kTemperatureC, "--operating-temperature-c"},
+        std::tuple{operating_wavelength_nm, ControlMapConfig::Condition::kWavelengthNm, "--operating-wavelength-nm"}}) {
+    if (!point) continue;
+    int keyed = 0;
+    const auto apply = [&](ControlMapConfig& map, const std::string& path) {
+      if (map.kind != ControlMapConfig::Kind::kTablesByCondition || map.condition != condition) return;
+      map.operating_point = *point;
+      field_to_flag_[fmt::format("{}.tables_by_condition.operating_{}", path, ConditionKeyName(condition))] = flag;
+      ++keyed;
+    };
+    for (size_t i = 0; i < s->stages.size(); ++i) {
+      StageConfig& stage = s->stages[i];
+      apply(stage.map, fmt::format("stages[{}].map", i));
+      if (stage.retardance.controlled) {
+        apply(stage.retardance.map, fmt::format("stages[{}].adjustable_axis.retardance.controlled.map", i));
+      }
+      if (stage.orientation.controlled) {
+        apply(stage.orientation.map, fmt::format("stages[{}].adjustable_axis.orientation.controlled.map", i));
+      }
+    }
+    if (keyed == 0) {
+      throw ScenarioError(flag, fmt::format("no map of the scenario is keyed by {} (tables_by_condition with "
+                                            "operating_{})",
+                                            condition == ControlMapConfig::Condition::kTemperatureC ? "temperature"
+                                                                                                   : "wavelength",
+                                            ConditionKeyName(condition)));
     }
   }
   if (static_cast<int>(!target_point.empty()) + static_cast<int>(!target_set.empty()) +

@@ -23,6 +23,8 @@
 //   --static                the input SOP holds still (removes every disturbance)
 //   --duration-s, --delay-s, --sample-rate-hz, --seed, --noise-deg, --lock-threshold-deg,
 //   --statistics-from-s, --settle-samples   simulation.*
+//   --operating-temperature-c, --operating-wavelength-nm   the operating point of every map
+//                           keyed by temperature / wavelength (tables_by_condition)
 //
 // Overrides are applied to the plain ScenarioConfig before validation; when validation then
 // rejects a field that a flag set, the message names the flag as well.
@@ -54,6 +56,7 @@ struct ScenarioOverrides {
       statistics_from_s;
   std::optional<uint64_t> seed;
   std::optional<int64_t> settle_samples;
+  std::optional<double> operating_temperature_c, operating_wavelength_nm;
 
   /// Registers the flags on `app`.
   void AddTo(CLI::App& app);

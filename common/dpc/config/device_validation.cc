@@ -1,5 +1,5 @@
 // The device part of the scenario validation: the stages, their control maps (linear,
-// polynomial, lookup table) and control ranges; ValidateDeviceStages and ScenarioControlCount.
+// polynomial, lookup table, tables by temperature or wavelength) and control ranges; ValidateDeviceStages and ScenarioControlCount.
 
 #include "dpc/config/scenario_validation.h"
 
@@ -8,6 +8,7 @@
 #include <string>
 
 #include "dpc/config/field_checks.h"
+#include "dpc/config/scenario_builders.h"
 
 namespace dpc {
 namespace {
@@ -57,9 +58,7 @@ void ValidatePolynomialMap(const ControlMapConfig& map, const std::string& path)
   }
 }
 
-void ValidateTableMap(const ControlMapConfig& map, const std::string& path) {
-  const auto& control = map.table_control;
-  const auto& angle = map.table_angle_rad;
+void ValidateTable(const std::vector<double>& control, const std::vector<double>& angle, const std::string& path) {
   if (control.size() != angle.size()) {
     Fail(path, fmt::format("{} control values but {} angle_rad values; they must pair up",
                            control.size(), angle.size()));
@@ -100,6 +99,55 @@ void ValidateTableMap(const ControlMapConfig& map, const std::string& path) {
   }
 }
 
+void ValidateTableMap(const ControlMapConfig& map, const std::string& path) {
+  ValidateTable(map.table_control, map.table_angle_rad, path);
+}
+
+void ValidateConditionTables(const ControlMapConfig& map, const std::string& path) {
+  const std::string key = ConditionKeyName(map.condition);
+  const char* unit = ConditionUnit(map.condition);
+  const bool wavelength = map.condition == ControlMapConfig::Condition::kWavelengthNm;
+  const auto& tables = map.condition_tables;
+  if (tables.size() < 2 || tables.size() > static_cast<size_t>(ControlMapConfig::kMaxConditionTables)) {
+    Fail(path + ".tables", fmt::format("{} table(s); a map by condition needs 2 to {} (else use a table)",
+                                       tables.size(), ControlMapConfig::kMaxConditionTables));
+  }
+  bool increasing = true;
+  for (size_t i = 0; i < tables.size(); ++i) {
+    const std::string table_path = fmt::format("{}.tables[{}]", path, i);
+    const double condition = tables[i].condition;
+    RequireFinite(condition, table_path + "." + key, "a table's condition must be finite");
+    if (wavelength && !(condition > 0.0)) {
+      Fail(table_path + "." + key, fmt::format("{} nm; a wavelength must be positive", condition));
+    }
+    if (i > 0 && !(condition > tables[i - 1].condition)) {
+      Fail(table_path + "." + key, fmt::format("{} {} after {} {}; the tables' conditions must be strictly increasing",
+                                               condition, unit, tables[i - 1].condition, unit));
+    }
+    ValidateTable(tables[i].control, tables[i].angle_rad, table_path + ".table");
+    const bool this_increasing = tables[i].angle_rad[1] > tables[i].angle_rad[0];
+    if (i == 0) increasing = this_increasing;
+    if (this_increasing != increasing) {
+      Fail(table_path + ".table.angle_rad",
+           fmt::format("the table {} while tables[0] {}: interpolating between them would not be monotonic",
+                       this_increasing ? "increases" : "decreases", increasing ? "increases" : "decreases"));
+    }
+  }
+  const std::string operating_path = path + ".operating_" + key;
+  RequireFinite(map.operating_point, operating_path, "the operating point must be finite");
+  if (map.operating_point < tables.front().condition || map.operating_point > tables.back().condition) {
+    Fail(operating_path, fmt::format("{} {} is outside the calibrated {}–{} {}: a calibration is not extrapolated "
+                                     "(calibrate at this {} too)",
+                                     map.operating_point, unit, tables.front().condition, tables.back().condition,
+                                     unit, wavelength ? "wavelength" : "temperature"));
+  }
+  try {
+    ResolveConditionTables(map);
+  } catch (const std::invalid_argument& e) {
+    Fail(path, e.what());
+  }
+}
+
 void ValidateMap(const ControlMapConfig& map, const std::string& path) {
   switch (map.kind) {
     case ControlMapConfig::Kind::kLinear: ValidateLinearMap(map, path + ".linear"); return;
@@ -107,6 +155,9 @@ void ValidateMap(const ControlMapConfig& map, const std::string& path) {
       ValidatePolynomialMap(map, path + ".polynomial");
       return;
     case ControlMapConfig::Kind::kTable: ValidateTableMap(map, path + ".table"); return;
+    case ControlMapConfig::Kind::kTablesByCondition:
+      ValidateConditionTables(map, path + ".tables_by_condition");
+      return;
   }
   Fail(path, "unknown map kind");
 }

@@ -16,9 +16,22 @@
 
 namespace dpc {
 
-/// ControlMap::Linear / Polynomial / Table from the config's kind. Throws std::invalid_argument
-/// for an invalid map.
+/// ControlMap::Linear / Polynomial / Table from the config's kind (tables by condition as
+/// ResolveConditionTables resolves them). Throws std::invalid_argument for an invalid map.
 ControlMap BuildControlMap(const ControlMapConfig& config);
+
+/// A tables_by_condition map as the plain lookup table it stands for at its operating point:
+/// between the two tables around the point, the angle at every control point of either is
+/// interpolated between the two tables' values there (each table read piecewise linearly,
+/// extrapolated linearly beyond its ends), with the weight linear in the temperature or in
+/// 1/λ; at a table's own condition, that table. Other kinds are returned as they are. Throws
+/// std::invalid_argument if there are fewer than 2 tables, the point is outside their span or
+/// not finite, a table is invalid, or the result has more than ControlMap::kMaxTablePoints.
+ControlMapConfig ResolveConditionTables(const ControlMapConfig& config);
+
+/// "temperature_c" or "wavelength_nm"; with the unit for messages: "°C" or "nm".
+const char* ConditionKeyName(ControlMapConfig::Condition condition);
+const char* ConditionUnit(ControlMapConfig::Condition condition);
 
 /// One WaveplateStage per config, in order: fixed-axis stages become WaveplateStage::FixedAxis
 /// (axis normalized, map, range), adjustable-axis stages WaveplateStage::AdjustableAxis with

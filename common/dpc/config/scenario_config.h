@@ -23,15 +23,32 @@
 
 namespace dpc {
 
+/// scenario.proto TableAtCondition: a lookup table measured at one temperature or wavelength.
+struct ConditionTableConfig {
+  double condition = 0.0;                  ///< °C or nm (ControlMapConfig::condition)
+  std::vector<double> control;             ///< φ points, strictly increasing
+  std::vector<double> angle_rad;           ///< θ points, strictly monotonic
+};
+
 /// scenario.proto ControlMap.
 struct ControlMapConfig {
-  enum class Kind { kLinear, kPolynomial, kTable };
+  enum class Kind { kLinear, kPolynomial, kTable, kTablesByCondition };
+  /// What a kTablesByCondition map's tables are keyed by.
+  enum class Condition { kTemperatureC, kWavelengthNm };
+  /// The most tables a kTablesByCondition map may have.
+  static constexpr int kMaxConditionTables = 16;
+
   Kind kind = Kind::kLinear;
   double rad_per_unit = M_PI;              ///< linear: θ = rad_per_unit·φ + offset_rad
   double offset_rad = 0.0;
   std::vector<double> coefficients_rad;    ///< polynomial: θ = Σ c_j φ^j, c_0 first
   std::vector<double> table_control;       ///< table: φ points, strictly increasing
   std::vector<double> table_angle_rad;     ///< table: θ points, strictly monotonic
+  // tables_by_condition: the tables and the operating point, interpolated between the two
+  // tables around it (ResolveConditionTables, scenario_builders.h).
+  Condition condition = Condition::kTemperatureC;
+  double operating_point = 0.0;            ///< °C or nm
+  std::vector<ConditionTableConfig> condition_tables;  ///< conditions strictly increasing
 };
 
 /// scenario.proto StageAngle: an adjustable-axis stage's retardance θ or orientation ϕ.

@@ -69,7 +69,27 @@ Vector3 AxisFromEnum(scenario::Axis axis, const Vector3& default_axis, const std
   }
 }
 
-ControlMapConfig MapFromProto(const scenario::ControlMap& proto) {
+ConditionTableConfig ConditionTableFromProto(const scenario::TableAtCondition& proto,
+                                             ControlMapConfig::Condition condition, const std::string& path) {
+  const bool by_temperature = condition == ControlMapConfig::Condition::kTemperatureC;
+  const char* wanted = by_temperature ? "temperature_c" : "wavelength_nm";
+  const bool has = by_temperature ? proto.condition_case() == scenario::TableAtCondition::kTemperatureC
+                                  : proto.condition_case() == scenario::TableAtCondition::kWavelengthNm;
+  if (!has) {
+    throw ScenarioError(path, fmt::format("{}: the map's operating point is a {}, so every table needs its {}",
+                                          proto.condition_case() == scenario::TableAtCondition::CONDITION_NOT_SET
+                                              ? "no condition"
+                                              : "a condition of the other kind",
+                                          by_temperature ? "temperature" : "wavelength", wanted));
+  }
+  ConditionTableConfig table;
+  table.condition = by_temperature ? proto.temperature_c() : proto.wavelength_nm();
+  table.control.assign(proto.table().control().begin(), proto.table().control().end());
+  table.angle_rad.assign(proto.table().angle_rad().begin(), proto.table().angle_rad().end());
+  return table;
+}
+
+ControlMapConfig MapFromProto(const scenario::ControlMap& proto, const std::string& path) {
   ControlMapConfig map;  // unset: linear, π rad per unit
   switch (proto.kind_case()) {
     case scenario::ControlMap::kLinear:
@@ -88,6 +108,29 @@ ControlMapConfig MapFromProto(const scenario::ControlMap& proto) {
       map.table_angle_rad.assign(proto.table().angle_rad().begin(),
                                  proto.table().angle_rad().end());
       break;
+    case scenario::ControlMap::kTablesByCondition: {
+      const scenario::TablesByCondition& keyed = proto.tables_by_condition();
+      const std::string keyed_path = path + ".tables_by_condition";
+      map.kind = ControlMapConfig::Kind::kTablesByCondition;
+      switch (keyed.operating_case()) {
+        case scenario::TablesByCondition::kOperatingTemperatureC:
+          map.condition = ControlMapConfig::Condition::kTemperatureC;
+          map.operating_point = keyed.operating_temperature_c();
+          break;
+        case scenario::TablesByCondition::kOperatingWavelengthNm:
+          map.condition = ControlMapConfig::Condition::kWavelengthNm;
+          map.operating_point = keyed.operating_wavelength_nm();
+          break;
+        case scenario::TablesByCondition::OPERATING_NOT_SET:
+          throw ScenarioError(keyed_path, "no operating point: set operating_temperature_c or operating_wavelength_nm "
+                                          "(the condition the bench runs at)");
+      }
+      for (int i = 0; i < keyed.tables_size(); ++i) {
+        map.condition_tables.push_back(
+            ConditionTableFromProto(keyed.tables(i), map.condition, fmt::format("{}.tables[{}]", keyed_path, i)));
+      }
+      break;
+    }
     case scenario::ControlMap::KIND_NOT_SET: break;
   }
   return map;
@@ -97,7 +140,7 @@ ControlRange RangeFromProto(const scenario::ControlRange& proto) {
   return ControlRange{proto.min(), proto.max()};
 }
 
-StageAngleConfig AngleFromProto(const scenario::StageAngle& proto) {
+StageAngleConfig AngleFromProto(const scenario::StageAngle& proto, const std::string& path) {
   StageAngleConfig angle;  // unset: fixed at 0 rad
   switch (proto.kind_case()) {
     case scenario::StageAngle::kFixedRad:
@@ -106,7 +149,7 @@ StageAngleConfig AngleFromProto(const scenario::StageAngle& proto) {
       break;
     case scenario::StageAngle::kControlled:
       angle.controlled = true;
-      angle.map = MapFromProto(proto.controlled().map());
+      angle.map = MapFromProto(proto.controlled().map(), path + ".controlled.map");
       if (proto.controlled().has_range()) angle.range = RangeFromProto(proto.controlled().range());
       break;
     case scenario::StageAngle::KIND_NOT_SET: break;
@@ -134,8 +177,8 @@ StageConfig StageFromProto(const scenario::Stage& proto, const std::string& path
                                       fixed_fields));
     }
     stage.kind = StageConfig::Kind::kAdjustableAxis;
-    stage.retardance = AngleFromProto(proto.adjustable_axis().retardance());
-    stage.orientation = AngleFromProto(proto.adjustable_axis().orientation());
+    stage.retardance = AngleFromProto(proto.adjustable_axis().retardance(), path + ".adjustable_axis.retardance");
+    stage.orientation = AngleFromProto(proto.adjustable_axis().orientation(), path + ".adjustable_axis.orientation");
     return stage;
   }
   stage.kind = StageConfig::Kind::kFixedAxis;
@@ -146,7 +189,7 @@ StageConfig StageFromProto(const scenario::Stage& proto, const std::string& path
     case scenario::Stage::kAxisVector: stage.axis = VectorFromProto(proto.axis_vector()); break;
     case scenario::Stage::AXIS_KIND_NOT_SET: break;
   }
-  stage.map = MapFromProto(proto.map());
+  stage.map = MapFromProto(proto.map(), path + ".map");
   if (proto.has_range()) stage.range = RangeFromProto(proto.range());
   return stage;
 }

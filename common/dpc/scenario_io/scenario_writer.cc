@@ -44,6 +44,27 @@ void MapToProto(const ControlMapConfig& map, scenario::ControlMap* proto) {
       table->mutable_angle_rad()->Add(map.table_angle_rad.begin(), map.table_angle_rad.end());
       return;
     }
+    case ControlMapConfig::Kind::kTablesByCondition: {
+      const bool by_temperature = map.condition == ControlMapConfig::Condition::kTemperatureC;
+      scenario::TablesByCondition* keyed = proto->mutable_tables_by_condition();
+      if (by_temperature) {
+        keyed->set_operating_temperature_c(map.operating_point);
+      } else {
+        keyed->set_operating_wavelength_nm(map.operating_point);
+      }
+      for (const ConditionTableConfig& condition_table : map.condition_tables) {
+        scenario::TableAtCondition* at = keyed->add_tables();
+        if (by_temperature) {
+          at->set_temperature_c(condition_table.condition);
+        } else {
+          at->set_wavelength_nm(condition_table.condition);
+        }
+        at->mutable_table()->mutable_control()->Add(condition_table.control.begin(), condition_table.control.end());
+        at->mutable_table()->mutable_angle_rad()->Add(condition_table.angle_rad.begin(),
+                                                      condition_table.angle_rad.end());
+      }
+      return;
+    }
   }
 }
 

@@ -248,6 +248,19 @@ TEST(DeviceDescription, RoundTripsEveryStageKindMapAndRange) {
   EXPECT_EQ(back[3].name, "qwp");
 }
 
+TEST(DeviceDescription, TablesByConditionTravelAsTheTableAtTheOperatingPoint) {
+  std::vector<StageConfig> stages = StagesFromAxes("131");
+  stages[1].map.kind = ControlMapConfig::Kind::kTablesByCondition;
+  stages[1].map.operating_point = 25.0;
+  stages[1].map.condition_tables = {{20.0, {0, 1}, {0, 1}}, {30.0, {0, 1}, {0, 1.2}}};
+  DeviceDescription read;
+  ASSERT_EQ(ReadDevice(DeviceMessage(DeviceDescription{"d", stages, 0.0, 0.0}, "b"), &read), "");
+  EXPECT_EQ(read.stages[1].map.kind, ControlMapConfig::Kind::kTable);
+  EXPECT_EQ(read.stages[1].map.table_control, (std::vector<double>{0, 1}));
+  ASSERT_EQ(read.stages[1].map.table_angle_rad.size(), 2u);
+  EXPECT_NEAR(read.stages[1].map.table_angle_rad[1], 1.1, 1e-15);
+}
+
 TEST(DeviceDescription, ABadDescriptionIsRefusedWithTheFieldPath) {
   DeviceDescription read;
   msg::DeviceDescription d = DeviceMessage(DeviceDescription{"d", StagesFromAxes("131"), 0.0, 0.0}, "b");

@@ -354,6 +354,26 @@ TEST_F(ScenarioOverridesTest, RateGivesAStaticInputAScrambler) {
   EXPECT_NEAR(scenario_.input.disturbances[0].rate_rad_per_s, 300.0, kTolerance);
 }
 
+TEST_F(ScenarioOverridesTest, OperatingTemperatureSetsEveryMapKeyedByTemperature) {
+  ControlMapConfig keyed;
+  keyed.kind = ControlMapConfig::Kind::kTablesByCondition;
+  keyed.operating_point = 20.0;
+  keyed.condition_tables = {{20.0, {0, 1}, {0, 1}}, {40.0, {0, 1}, {0, 1.1}}};
+  scenario_.stages[0].map = keyed;
+  scenario_.stages[2].map = keyed;
+  EXPECT_EQ(ApplyAndGetErrorLocation({"--operating-temperature-c", "32.5"}), "");
+  EXPECT_EQ(scenario_.stages[0].map.operating_point, 32.5);
+  EXPECT_EQ(scenario_.stages[1].map.kind, ControlMapConfig::Kind::kLinear);
+  EXPECT_EQ(scenario_.stages[2].map.operating_point, 32.5);
+  EXPECT_EQ(overrides_.FlagForField("stages[2].map.tables_by_condition.operating_temperature_c"),
+            "--operating-temperature-c");
+}
+
+TEST_F(ScenarioOverridesTest, AnOperatingPointWithoutAMapKeyedByItThrowsNamingTheFlag) {
+  EXPECT_EQ(ApplyAndGetErrorLocation({"--operating-wavelength-nm", "1550"}), "--operating-wavelength-nm");
+  EXPECT_NE(message_.find("no map of the scenario is keyed by wavelength"), std::string::npos) << message_;
+}
+
 TEST_F(ScenarioOverridesTest, ApplyingAgainGivesTheSameResult) {
   Parse({"--rate-rad-per-s", "300", "--step", "0.4"});
   overrides_.Apply(&scenario_);

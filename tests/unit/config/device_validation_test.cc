@@ -35,6 +35,15 @@ class DeviceValidationTest : public testing::ScenarioFixture {
     map.coefficients_rad = std::move(coefficients_rad);
     return map;
   }
+  /// Tables at 20 and 40 °C, operating at 30 °C.
+  static ControlMapConfig ByTemperature() {
+    ControlMapConfig map;
+    map.kind = ControlMapConfig::Kind::kTablesByCondition;
+    map.condition = ControlMapConfig::Condition::kTemperatureC;
+    map.operating_point = 30.0;
+    map.condition_tables = {{20.0, {0, 1, 2}, {0, 1, 3}}, {40.0, {0, 1, 2}, {0, 1.1, 3.3}}};
+    return map;
+  }
   /// A rotatable quarter-wave plate: θ fixed at π/2, ϕ controlled.
   static StageConfig QuarterWavePlate() {
     StageConfig stage;
@@ -146,6 +155,61 @@ TEST_F(DeviceValidationTest, LookupTableNeedsTwoPoints) {
 TEST_F(DeviceValidationTest, LookupTableValuesMustBeFinite) {
   scenario_.stages[0].map = Table({0, 1, 2}, {0, 1, kNaN});
   EXPECT_EQ(ErrorLocation(), "stages[0].map.table.angle_rad[2]");
+}
+
+// ---- Tables by condition.
+
+TEST_F(DeviceValidationTest, TablesByTemperatureAreAccepted) {
+  scenario_.stages[0].map = ByTemperature();
+  EXPECT_EQ(ErrorLocation(), "(valid)");
+}
+
+TEST_F(DeviceValidationTest, AnOperatingPointOutsideTheCalibratedSpanIsRejected) {
+  scenario_.stages[0].map = ByTemperature();
+  scenario_.stages[0].map.operating_point = 45.0;
+  EXPECT_EQ(ErrorLocation(), "stages[0].map.tables_by_condition.operating_temperature_c");
+  EXPECT_EQ(ErrorMessage(),
+            "45 °C is outside the calibrated 20–40 °C: a calibration is not extrapolated (calibrate at this "
+            "temperature too)");
+  scenario_.stages[0].map.condition = ControlMapConfig::Condition::kWavelengthNm;
+  scenario_.stages[0].map.operating_point = kNaN;
+  EXPECT_EQ(ErrorLocation(), "stages[0].map.tables_by_condition.operating_wavelength_nm");
+}
+
+TEST_F(DeviceValidationTest, TablesByConditionNeedTwoToSixteenTablesInIncreasingOrder) {
+  scenario_.stages[0].map = ByTemperature();
+  scenario_.stages[0].map.condition_tables.resize(1);
+  EXPECT_EQ(ErrorLocation(), "stages[0].map.tables_by_condition.tables");
+  scenario_.stages[0].map = ByTemperature();
+  scenario_.stages[0].map.condition_tables.resize(17, scenario_.stages[0].map.condition_tables[1]);
+  EXPECT_EQ(ErrorLocation(), "stages[0].map.tables_by_condition.tables");
+  scenario_.stages[0].map = ByTemperature();
+  scenario_.stages[0].map.condition_tables[1].condition = 20.0;
+  EXPECT_EQ(ErrorLocation(), "stages[0].map.tables_by_condition.tables[1].temperature_c");
+  EXPECT_THAT(ErrorMessage(), HasSubstr("strictly increasing"));
+  scenario_.stages[0].map.condition_tables[1].condition = kInf;
+  EXPECT_EQ(ErrorLocation(), "stages[0].map.tables_by_condition.tables[1].temperature_c");
+  scenario_.stages[0].map = ByTemperature();
+  scenario_.stages[0].map.condition = ControlMapConfig::Condition::kWavelengthNm;
+  scenario_.stages[0].map.condition_tables[0].condition = -20.0;
+  EXPECT_EQ(ErrorLocation(), "stages[0].map.tables_by_condition.tables[0].wavelength_nm");
+  EXPECT_THAT(ErrorMessage(), HasSubstr("positive"));
+}
+
+TEST_F(DeviceValidationTest, EachTableOfACondititionIsCheckedAsATable) {
+  scenario_.stages[0].map = ByTemperature();
+  scenario_.stages[0].map.condition_tables[1].control = {0, 2, 1};
+  EXPECT_EQ(ErrorLocation(), "stages[0].map.tables_by_condition.tables[1].table.control[2]");
+  scenario_.stages[0].map = ByTemperature();
+  scenario_.stages[0].map.condition_tables[0].angle_rad = {0, 1, kNaN};
+  EXPECT_EQ(ErrorLocation(), "stages[0].map.tables_by_condition.tables[0].table.angle_rad[2]");
+}
+
+TEST_F(DeviceValidationTest, TablesByConditionMustRunTheSameWay) {
+  scenario_.stages[0].map = ByTemperature();
+  scenario_.stages[0].map.condition_tables[1].angle_rad = {3, 1, 0};
+  EXPECT_EQ(ErrorLocation(), "stages[0].map.tables_by_condition.tables[1].table.angle_rad");
+  EXPECT_THAT(ErrorMessage(), HasSubstr("decreases while tables[0] increases"));
 }
 
 // ---- Ranges.

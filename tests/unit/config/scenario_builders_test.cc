@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <vector>
 
 #include "dpc/config/scenario_validation.h"
 
@@ -56,6 +57,71 @@ TEST_F(ScenarioBuildersTest, TableMap) {
   const ControlMap map = BuildControlMap(config);
   EXPECT_EQ(map.kind(), ControlMap::Kind::kTable);
   EXPECT_NEAR(map.AngleRad(1.5), 2.0, kTight);
+}
+
+ControlMapConfig ByCondition(ControlMapConfig::Condition condition, double operating_point,
+                             std::vector<ConditionTableConfig> tables) {
+  ControlMapConfig config;
+  config.kind = ControlMapConfig::Kind::kTablesByCondition;
+  config.condition = condition;
+  config.operating_point = operating_point;
+  config.condition_tables = std::move(tables);
+  return config;
+}
+
+TEST_F(ScenarioBuildersTest, TablesByTemperatureInterpolateLinearlyOverTheUnionOfTheirPoints) {
+  const ControlMapConfig config = ByCondition(ControlMapConfig::Condition::kTemperatureC, 27.5,
+                                              {{10.0, {0, 1, 2}, {0, 1, 3}},
+                                               {20.0, {0, 2}, {0, 4}},
+                                               {30.0, {0, 0.5, 2}, {0, 1, 5}}});
+  const ControlMapConfig table = ResolveConditionTables(config);
+  EXPECT_EQ(table.kind, ControlMapConfig::Kind::kTable);
+  // Between the tables at 20 and 30 °C, 3/4 of the way: every control point of either.
+  EXPECT_EQ(table.table_control, (std::vector<double>{0, 0.5, 2}));
+  ASSERT_EQ(table.table_angle_rad.size(), 3u);
+  EXPECT_NEAR(table.table_angle_rad[1], 0.25 * 1.0 + 0.75 * 1.0, kTight);
+  EXPECT_NEAR(table.table_angle_rad[2], 0.25 * 4.0 + 0.75 * 5.0, kTight);
+  const ControlMap map = BuildControlMap(config);
+  EXPECT_EQ(map.kind(), ControlMap::Kind::kTable);
+  EXPECT_NEAR(map.AngleRad(2.0), 4.75, kTight);
+  // At a table's own condition: that table, exactly.
+  const ControlMapConfig at_table = ResolveConditionTables(
+      ByCondition(ControlMapConfig::Condition::kTemperatureC, 10.0, config.condition_tables));
+  EXPECT_EQ(at_table.table_control, (std::vector<double>{0, 1, 2}));
+  EXPECT_EQ(at_table.table_angle_rad, (std::vector<double>{0, 1, 3}));
+  // A union beyond one table's span: that table extrapolated linearly.
+  const ControlMapConfig wider = ResolveConditionTables(ByCondition(
+      ControlMapConfig::Condition::kTemperatureC, 15.0, {{10.0, {0, 1}, {0, 1}}, {20.0, {-1, 2}, {-2, 4}}}));
+  EXPECT_EQ(wider.table_control, (std::vector<double>{-1, 0, 1, 2}));
+  EXPECT_NEAR(wider.table_angle_rad[0], 0.5 * -1.0 + 0.5 * -2.0, kTight);
+  EXPECT_NEAR(wider.table_angle_rad[3], 0.5 * 2.0 + 0.5 * 4.0, kTight);
+}
+
+TEST_F(ScenarioBuildersTest, TablesByWavelengthInterpolateInOneOverLambda) {
+  // A retardance θ(φ)·λ0/λ at 1500 and 1600 nm: exact at 1550 nm in 1/λ (linear in λ is not).
+  const auto at = [](double nm) { return std::vector<double>{0.0, 3.0 * 1550.0 / nm}; };
+  const ControlMapConfig table = ResolveConditionTables(ByCondition(
+      ControlMapConfig::Condition::kWavelengthNm, 1550.0, {{1500.0, {0, 1}, at(1500.0)}, {1600.0, {0, 1}, at(1600.0)}}));
+  EXPECT_NEAR(table.table_angle_rad[1], 3.0, 1e-12);
+  const double linear_in_lambda = 0.5 * (at(1500.0)[1] + at(1600.0)[1]);
+  EXPECT_GT(std::abs(linear_in_lambda - 3.0), 1e-3);
+}
+
+TEST_F(ScenarioBuildersTest, TablesByConditionRefuseAPointOutsideTheirSpan) {
+  const ControlMapConfig config = ByCondition(ControlMapConfig::Condition::kTemperatureC, 41.0,
+                                              {{20.0, {0, 1}, {0, 1}}, {40.0, {0, 1}, {0, 1.1}}});
+  try {
+    ResolveConditionTables(config);
+    FAIL() << "no throw";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(),
+                 "the operating point 41 °C is outside the calibrated 20–40 °C (a calibration is not extrapolated: "
+                 "calibrate there too)");
+  }
+  EXPECT_THROW(BuildControlMap(config), std::invalid_argument);
+  EXPECT_THROW(ResolveConditionTables(ByCondition(ControlMapConfig::Condition::kTemperatureC, 20.0,
+                                                  {{20.0, {0, 1}, {0, 1}}})),
+               std::invalid_argument);
 }
 
 TEST_F(ScenarioBuildersTest, BadMapThrowsInvalidArgument) {

@@ -186,7 +186,7 @@ void CollectSchemaDoubles(const pb::Descriptor* descriptor, std::set<const pb::D
 TEST(ScenarioFileNonFiniteTest, EveryDoubleFieldIsValidatedAtItsPath) {
   std::set<std::string> covered;
   int cases = 0;
-  for (const char* text : {kFixedAxisText, kAdjustableAxisText, kInstrumentsText}) {
+  for (const char* text : {kFixedAxisText, kAdjustableAxisText, kInstrumentsText, kConditionTablesText}) {
     const scenario::Scenario valid = ParseScenarioText(text, "test.pbtxt");
     ASSERT_NO_THROW(ValidateScenario(ScenarioFromProto(valid)));
     std::vector<FieldPath> doubles;

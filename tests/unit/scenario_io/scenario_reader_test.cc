@@ -125,6 +125,45 @@ TEST(ScenarioReaderTest, MapAndRangeBranches) {
   EXPECT_EQ(config.stages[2].map.table_angle_rad, (std::vector<double>{-3, 0.5, 3}));
 }
 
+TEST(ScenarioReaderTest, TablesByConditionAreReadWithTheirKey) {
+  const ScenarioConfig config = FromText(kConditionTablesText);
+  ASSERT_EQ(config.stages.size(), 3u);
+  const ControlMapConfig& by_temperature = config.stages[0].map;
+  EXPECT_EQ(by_temperature.kind, ControlMapConfig::Kind::kTablesByCondition);
+  EXPECT_EQ(by_temperature.condition, ControlMapConfig::Condition::kTemperatureC);
+  EXPECT_EQ(by_temperature.operating_point, 30.0);
+  ASSERT_EQ(by_temperature.condition_tables.size(), 2u);
+  EXPECT_EQ(by_temperature.condition_tables[1].condition, 35.0);
+  EXPECT_EQ(by_temperature.condition_tables[1].control, (std::vector<double>{-1, 0.5, 1}));
+  EXPECT_EQ(by_temperature.condition_tables[1].angle_rad, (std::vector<double>{-3.2, 1.6, 3.2}));
+  const ControlMapConfig& by_wavelength = config.stages[2].orientation.map;
+  EXPECT_EQ(by_wavelength.kind, ControlMapConfig::Kind::kTablesByCondition);
+  EXPECT_EQ(by_wavelength.condition, ControlMapConfig::Condition::kWavelengthNm);
+  EXPECT_EQ(by_wavelength.operating_point, 1550.0);
+  EXPECT_EQ(by_wavelength.condition_tables[0].condition, 1500.0);
+  EXPECT_NO_THROW(ValidateScenario(config));
+}
+
+TEST(ScenarioReaderTest, TablesByConditionNeedOneKeyAndAnOperatingPoint) {
+  const auto error = ErrorOf(R"pb(stages { map { tables_by_condition {
+      operating_temperature_c: 20
+      tables { temperature_c: 10 table { control: [ 0, 1 ] angle_rad: [ 0, 1 ] } }
+      tables { wavelength_nm: 1550 table { control: [ 0, 1 ] angle_rad: [ 0, 1 ] } } } } })pb");
+  ASSERT_TRUE(error);
+  EXPECT_EQ(error->location(), "stages[0].map.tables_by_condition.tables[1]");
+  EXPECT_THAT(error->message(), HasSubstr("every table needs its temperature_c"));
+  const auto unkeyed = ErrorOf(R"pb(stages { map { tables_by_condition {
+      operating_wavelength_nm: 1550 tables { table { control: [ 0, 1 ] angle_rad: [ 0, 1 ] } } } } })pb");
+  ASSERT_TRUE(unkeyed);
+  EXPECT_EQ(unkeyed->location(), "stages[0].map.tables_by_condition.tables[0]");
+  EXPECT_THAT(unkeyed->message(), HasSubstr("no condition"));
+  const auto no_point = ErrorOf(R"pb(stages { adjustable_axis { retardance { controlled { map {
+      tables_by_condition { tables { temperature_c: 10 table { control: [ 0, 1 ] angle_rad: [ 0, 1 ] } } } } } } } })pb");
+  ASSERT_TRUE(no_point);
+  EXPECT_EQ(no_point->location(), "stages[0].adjustable_axis.retardance.controlled.map.tables_by_condition");
+  EXPECT_THAT(no_point->message(), HasSubstr("no operating point"));
+}
+
 TEST(ScenarioReaderTest, StageAngleBranches) {
   const ScenarioConfig config = FromText(kAdjustableAxisText);
   ASSERT_EQ(config.stages.size(), 3u);

@@ -23,7 +23,7 @@ TEST(ScenarioWriterTest, PaperScenarioRoundTrips) {
 }
 
 TEST(ScenarioWriterTest, EveryFieldRoundTrips) {
-  for (const char* text : {kFixedAxisText, kAdjustableAxisText}) {
+  for (const char* text : {kFixedAxisText, kAdjustableAxisText, kConditionTablesText}) {
     const ScenarioConfig config = FromText(text);
     SCOPED_TRACE(config.name);
     ExpectSameScenario(ScenarioFromProto(ScenarioToProto(config)), config);
