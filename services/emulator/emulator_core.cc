@@ -97,6 +97,9 @@ void ScaleMap(ControlMapConfig* map, double factor) {
   map->offset_rad *= factor;
   for (double& c : map->coefficients_rad) c *= factor;
   for (double& a : map->table_angle_rad) a *= factor;
+  for (ConditionTableConfig& table : map->condition_tables) {
+    for (double& a : table.angle_rad) a *= factor;
+  }
 }
 
 nlohmann::ordered_json Vector(const StokesVector& s) { return {s.x(), s.y(), s.z()}; }
@@ -114,6 +117,13 @@ std::string TemperatureProblem(double temperature_c, double coefficient_per_k) {
     return fmt::format("at {} °C the retardance factor 1 + {}·(T − 25) would be {:.4g}: not a drift the emulator "
                        "models (it must stay > 0)",
                        temperature_c, coefficient_per_k, factor);
+  }
+  return {};
+}
+
+std::string WavelengthProblem(double wavelength_nm) {
+  if (!(std::isfinite(wavelength_nm) && wavelength_nm >= kMinWavelengthNm && wavelength_nm <= kMaxWavelengthNm)) {
+    return fmt::format("{} nm is not in [{}, {}] nm", wavelength_nm, kMinWavelengthNm, kMaxWavelengthNm);
   }
   return {};
 }
@@ -137,6 +147,9 @@ void ValidateEmulatorSettings(const EmulatorSettings& s) {
   if (const std::string problem = TemperatureProblem(s.temperature_c, s.temperature_coefficient_per_k);
       !problem.empty()) {
     throw std::invalid_argument("--temperature-c: " + problem);
+  }
+  if (const std::string problem = WavelengthProblem(s.wavelength_nm); !problem.empty()) {
+    throw std::invalid_argument("--wavelength-nm: " + problem);
   }
 }
 
@@ -212,20 +225,22 @@ EmulatedDevice::EmulatedDevice(const ScenarioConfig& scenario, const EmulatorSet
       settings_(Checked(settings)),
       dac_(settings.dac_bits, settings.volts_min, settings.volts_max),
       temperature_c_(settings.temperature_c),
+      wavelength_nm_(settings.wavelength_nm),
       input_(MakeInputSopGenerator(scenario.input, scenario.simulation.seed, scenario.simulation.sample_rate_hz)),
       input_rate_hz_(scenario.simulation.sample_rate_hz),
       start_ns_(now_ns),
       last_ns_(now_ns),
       input_noise_(scenario.simulation.polarimeter_noise_deg, scenario.simulation.seed, kInputPolarimeterStream),
       output_noise_(scenario.simulation.polarimeter_noise_deg, scenario.simulation.seed, kOutputPolarimeterStream) {
-  BuildChainAt(temperature_c_);
+  BuildChainAt(temperature_c_, wavelength_nm_);
   channels_.assign(chain_->control_count(), EpcChannel(settings.hysteresis_v, settings.settling_s));
   volts_ = ControlVector::Zero(chain_->control_count());
   input_.Next();  // S_in[0]: the initial SOP
 }
 
-void EmulatedDevice::BuildChainAt(double temperature_c) {
-  const double factor = 1.0 + settings_.temperature_coefficient_per_k * (temperature_c - kReferenceTemperatureC);
+void EmulatedDevice::BuildChainAt(double temperature_c, double wavelength_nm) {
+  const double factor = (1.0 + settings_.temperature_coefficient_per_k * (temperature_c - kReferenceTemperatureC)) *
+                        (kReferenceWavelengthNm / wavelength_nm);
   chain_ = std::make_unique<WaveplateChain>(BuildChain(factor == 1.0 ? stages_ : ScaleRetardances(stages_, factor)));
 }
 
@@ -272,8 +287,15 @@ std::string EmulatedDevice::SetTemperature(double temperature_c) {
       !problem.empty()) {
     return problem;
   }
-  BuildChainAt(temperature_c);
+  BuildChainAt(temperature_c, wavelength_nm_);
   temperature_c_ = temperature_c;
+  return {};
+}
+
+std::string EmulatedDevice::SetWavelength(double wavelength_nm) {
+  if (std::string problem = WavelengthProblem(wavelength_nm); !problem.empty()) return problem;
+  BuildChainAt(temperature_c_, wavelength_nm);
+  wavelength_nm_ = wavelength_nm;
   return {};
 }
 
@@ -296,7 +318,7 @@ const char* InstrumentName(Instrument instrument) {
 std::string ControlHelp() {
   return "disconnect epc|polarimeter|all [seconds]; garbage epc|polarimeter <count>; "
          "truncate epc|polarimeter <count>; slow epc|polarimeter <seconds> <count>; powercycle [seconds]; "
-         "temperature <celsius>; status; help";
+         "temperature <celsius>; wavelength <nm>; status; help";
 }
 
 EmulatorCore::EmulatorCore(const ScenarioConfig& scenario, const EmulatorSettings& settings, int64_t now_ns,
@@ -620,6 +642,13 @@ std::string EmulatorCore::ControlReply(SessionId id, std::string_view line, int6
     if (std::string problem = device_.SetTemperature(celsius); !problem.empty()) return error("temperature: " + problem);
     return ok(fmt::format("temperature {:g} C", celsius));
   }
+  if (command == "wavelength") {
+    if (words.size() != 2) return usage("wavelength <nm>");
+    double nm = 0.0;
+    if (ParseNumber(words[1], &nm) != NumberParse::kOk) return error("wavelength must be a finite number");
+    if (std::string problem = device_.SetWavelength(nm); !problem.empty()) return error("wavelength: " + problem);
+    return ok(fmt::format("wavelength {:g} nm", nm));
+  }
   return error("unknown command; " + ControlHelp());
 }
 
@@ -704,6 +733,7 @@ nlohmann::ordered_json EmulatorCore::Status(int64_t now_ns) const {
   nlohmann::ordered_json status;
   status["time_s"] = static_cast<double>(now_ns - start_ns_) * 1e-9;
   status["temperature_c"] = device_.temperature_c();
+  status["wavelength_nm"] = device_.wavelength_nm();
   nlohmann::ordered_json channels = nlohmann::ordered_json::array();
   for (int c = 0; c < device_.channel_count(); ++c) {
     channels.push_back({{"set_v", device_.set_v(c)}, {"effective_v", device_.effective_v(c)}});

@@ -39,7 +39,7 @@
 //                                     reading of that query every 1/hz s (1 Hz to 100 kHz), by
 //                                     itself; :MEAS:STREAM OFF stops it. Queries still answer.
 //   either       anything else      → ERR unknown command
-//   control      see ControlHelp(): faults, power cycle, temperature, status (one JSON line)
+//   control      see ControlHelp(): faults, power cycle, temperature, wavelength, status (one JSON line)
 //
 // Every reply of the EPC and the polarimeter leaves latency_s after its query (plus a `slow`
 // fault's delay), and the replies of one session in the order of their queries. Faults
@@ -89,6 +89,7 @@ struct EmulatorSettings {
   double hysteresis_v = 0.0;                     ///< half-width h of the play operator
   double temperature_c = 25.0;
   double temperature_coefficient_per_k = 2e-3;   ///< k: θ_T = θ·(1 + k·(T − 25 °C))
+  double wavelength_nm = 1550.0;                 ///< λ: θ_λ = θ·1550 nm/λ (a retardance goes as 1/λ)
   double latency_s = 0.0;                        ///< each reply leaves this long after its query
 };
 
@@ -101,6 +102,11 @@ inline constexpr double kMinTemperatureC = -100.0;
 inline constexpr double kMaxTemperatureC = 200.0;
 inline constexpr double kMaxTemperatureCoefficientPerK = 0.1;
 inline constexpr double kReferenceTemperatureC = 25.0;
+/// The scenario's maps are the truth at this wavelength; the light's wavelength is within the
+/// span below.
+inline constexpr double kReferenceWavelengthNm = 1550.0;
+inline constexpr double kMinWavelengthNm = 400.0;
+inline constexpr double kMaxWavelengthNm = 2500.0;
 /// The input steps in real time, one per sample period: a faster rate would cost more than the
 /// emulator may spend (the paper's 50-MHz scenarios are for dpc sim).
 inline constexpr double kMaxInputRateHz = 1e6;
@@ -111,13 +117,17 @@ inline constexpr double kMaxInputCatchUpS = 1.0;
 /// its range: dac_bits 1…kMaxDacBits; volts_min < volts_max, both within ±kMaxAbsVolts;
 /// settling_s ∈ [0, kMaxSettlingS]; hysteresis_v ∈ [0, (volts_max − volts_min)/2];
 /// latency_s ∈ [0, kMaxLatencyS]; |temperature_coefficient_per_k| ≤ kMaxTemperatureCoefficientPerK;
-/// temperature_c as TemperatureProblem.
+/// temperature_c as TemperatureProblem; wavelength_nm as WavelengthProblem.
 void ValidateEmulatorSettings(const EmulatorSettings& settings);
 
 /// "" if the device may be at `temperature_c` with coefficient `k`: within [kMinTemperatureC,
 /// kMaxTemperatureC] and 1 + k·(T − 25) > 0 (a retardance that vanished or changed sign is no
 /// drift); else why not.
 std::string TemperatureProblem(double temperature_c, double coefficient_per_k);
+
+/// "" if the light may be at `wavelength_nm`: within [kMinWavelengthNm, kMaxWavelengthNm]; else
+/// why not.
+std::string WavelengthProblem(double wavelength_nm);
 
 /// The stages with every retardance scaled by `factor` (maps' angles and fixed retardances;
 /// orientations unchanged). `factor` > 0.
@@ -180,6 +190,9 @@ class EmulatedDevice {
   /// "" and the temperature set, or why not (TemperatureProblem; nothing changes).
   std::string SetTemperature(double temperature_c);
   double temperature_c() const { return temperature_c_; }
+  /// "" and the light's wavelength set, or why not (WavelengthProblem; nothing changes).
+  std::string SetWavelength(double wavelength_nm);
+  double wavelength_nm() const { return wavelength_nm_; }
 
   /// The true SOPs now (after Advance), no noise.
   const StokesVector& s_in() const { return input_.current_sop(); }
@@ -194,13 +207,14 @@ class EmulatedDevice {
   const WaveplateChain& chain() const { return *chain_; }
 
  private:
-  void BuildChainAt(double temperature_c);
+  void BuildChainAt(double temperature_c, double wavelength_nm);
 
-  std::vector<StageConfig> stages_;  ///< the truth at 25 °C
+  std::vector<StageConfig> stages_;  ///< the truth at 25 °C and 1550 nm
   EmulatorSettings settings_;
   DacScale dac_;
-  std::unique_ptr<WaveplateChain> chain_;  ///< at temperature_c_
+  std::unique_ptr<WaveplateChain> chain_;  ///< at temperature_c_ and wavelength_nm_
   double temperature_c_;
+  double wavelength_nm_;
   std::vector<EpcChannel> channels_;
   InputSopGenerator input_;
   double input_rate_hz_;

@@ -108,6 +108,10 @@ class EmulatorService final : public Service {
     app.add_option("--temperature-coefficient-per-k", s.temperature_coefficient_per_k,
                    "k: the retardance's relative change per kelvin")
         ->capture_default_str();
+    app.add_option("--wavelength-nm", s.wavelength_nm,
+                   "The light's wavelength: every retardance is θ(V)·1550 nm/λ, the scenario's maps being the truth at "
+                   "1550 nm (the control port's `wavelength` changes it)")
+        ->capture_default_str();
     app.add_option("--latency-s", s.latency_s, "Every reply leaves this long after its query")->capture_default_str();
   }
   static std::string LogName(const Options&) { return "emulator"; }
@@ -133,11 +137,12 @@ class EmulatorService final : public Service {
     }
     const EmulatedDevice& device = core_.device();
     spdlog::info("EPC: {} channels ({}), DAC {} bits over [{:g}, {:g}] V (step {:.4g} mV), settling {:g} s, "
-                 "hysteresis {:g} V, {:g} °C (k = {:g}/K), latency {:g} s",
+                 "hysteresis {:g} V, {:g} °C (k = {:g}/K), {:g} nm, latency {:g} s",
                  device.channel_count(), device.chain().Describe(), options.settings.dac_bits,
                  options.settings.volts_min, options.settings.volts_max, device.dac().step_v() * 1e3,
                  options.settings.settling_s, options.settings.hysteresis_v, options.settings.temperature_c,
-                 options.settings.temperature_coefficient_per_k, options.settings.latency_s);
+                 options.settings.temperature_coefficient_per_k, options.settings.wavelength_nm,
+                 options.settings.latency_s);
     for (const Listener& l : listeners_) spdlog::info("{} on 127.0.0.1:{}", InstrumentName(l.instrument), l.port);
     for (const auto& p : ptys_) spdlog::info("{} on {}", InstrumentName(p->instrument), p->terminal.path());
   }

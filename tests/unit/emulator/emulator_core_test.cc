@@ -399,6 +399,29 @@ TEST_F(EmulatorCoreTest, TemperatureScalesEveryRetardanceAndMovesTheOutput) {
   EXPECT_EQ(Status()["temperature_c"], -5.5);
 }
 
+TEST_F(EmulatorCoreTest, WavelengthScalesEveryRetardanceAsOneOverLambda) {
+  EmulatorSettings settings;
+  settings.wavelength_nm = 1500.0;  // θ·1550/1500
+  Start(OneStageScenario(), settings);
+  ASSERT_EQ(Ask(epc_, ":SOUR1:VOLT 5"), "OK");
+  const double v = core_->device().set_v(0);
+  EXPECT_NEAR(Sop(Ask(polarimeter_, ":MEAS:SOP?")).z(), std::sin(1550.0 / 1500.0 * Theta(v)), kPrinted);
+  EXPECT_EQ(Ask(control_, "wavelength 1550"), "OK wavelength 1550 nm");
+  EXPECT_NEAR(Sop(Ask(polarimeter_, ":MEAS:SOP?")).z(), std::sin(Theta(v)), kPrinted);
+  // With the temperature: the two factors multiply.
+  EXPECT_EQ(Ask(control_, "temperature 35"), "OK temperature 35 C");
+  EXPECT_EQ(Ask(control_, "wavelength 1600"), "OK wavelength 1600 nm");
+  EXPECT_NEAR(Sop(Ask(polarimeter_, ":MEAS:SOP?")).z(), std::sin(1.02 * 1550.0 / 1600.0 * Theta(v)), kPrinted);
+  EXPECT_EQ(Ask(control_, "wavelength 9000").rfind("ERR wavelength: 9000 nm is not in", 0), 0u);
+  EXPECT_EQ(Ask(control_, "wavelength red"), "ERR wavelength must be a finite number");
+  EXPECT_EQ(Ask(control_, "wavelength"), "ERR usage: wavelength <nm>");
+  EXPECT_EQ(core_->device().wavelength_nm(), 1600.0);
+  EXPECT_EQ(Status()["wavelength_nm"], 1600.0);
+  EmulatorSettings bad;
+  bad.wavelength_nm = NAN;
+  EXPECT_THROW(ValidateEmulatorSettings(bad), std::invalid_argument);
+}
+
 TEST_F(EmulatorCoreTest, NoiseDisplacesEachMeasurementByAboutSigma) {
   ScenarioConfig scenario = OneStageScenario();
   scenario.simulation.polarimeter_noise_deg = 1.0;
