@@ -96,6 +96,26 @@ TEST_F(DpcCliTest, ShippedStressScenariosRecoverWithoutResets) {
   EXPECT_LT(c["error_deg"]["max"].get<double>(), 11.9);  // 0.208 rad
 }
 
+TEST_F(DpcCliTest, ShippedTemperatureCalibrationRunsAtAnyCalibratedTemperatureOnly) {
+  // The maps are interpolated between the tables at 25 and 35 °C; the scenario's seed is fixed,
+  // so another operating temperature (another device) gives another run.
+  const Result at_30 = Run("sim " + Scenario("emulator_epc_by_temperature") +
+                           " --duration-s 0.5 --operating-temperature-c 30 --json");
+  ASSERT_EQ(at_30.exit_code, 0) << at_30.err;
+  const Result at_25 = Run("sim " + Scenario("emulator_epc_by_temperature") + " --duration-s 0.5 --json");
+  ASSERT_EQ(at_25.exit_code, 0) << at_25.err;
+  const auto a = nlohmann::json::parse(at_30.out), b = nlohmann::json::parse(at_25.out);
+  EXPECT_LT(a["error_deg"]["p50"].get<double>(), 1.0);
+  EXPECT_NE(a["phi_max"], b["phi_max"]);
+  const Result outside = Run("sim " + Scenario("emulator_epc_by_temperature") + " --operating-temperature-c 40");
+  EXPECT_EQ(outside.exit_code, 2);
+  EXPECT_NE(outside.err.find("stages[0].map.tables_by_condition.operating_temperature_c: 40 °C is outside the "
+                             "calibrated 15–35 °C"),
+            std::string::npos)
+      << outside.err;
+  EXPECT_NE(outside.err.find("(set by --operating-temperature-c)"), std::string::npos) << outside.err;
+}
+
 TEST_F(DpcCliTest, ThresholdedScenarioUsesTheNullSpaceOnlyPartOfTheTime) {
   const Result r = Run("sim " + Scenario("paper_fig5") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -5,6 +5,7 @@
 // slow replies, a power cycle) makes the driver hold the last good φ and say why; on recovery
 // the device is set to that φ again and control resumes without a jump.
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <nlohmann/json.hpp>
@@ -351,6 +352,90 @@ TEST_F(BenchInstrumentsTest, CalibrationRecoversTheNonlinearMapsAndTheBenchTrack
   }
   std::cerr << "median error: true maps " << truth_sum / 3 << "°, calibrated maps " << fit_sum / 3 << "°\n";
   EXPECT_LE(fit_sum, 1.10 * truth_sum) << "true maps " << truth_sum / 3 << "°, calibrated " << fit_sum / 3 << "°";
+}
+
+TEST_F(BenchInstrumentsTest, CalibrationAtSeveralTemperaturesInterpolatesTheMapsAtTheOperatingTemperature) {
+  // The emulator's retardances drift by k = 2e-3 per kelvin (θ·(1 + k·(T − 25 °C))).
+  const json ports = StartEmulator();
+  const ScenarioConfig truth = LoadScenarioFile(std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/emulator_epc.pbtxt");
+  ScenarioConfig nominal = LoadScenarioFile(BenchScenario(Tcp(ports["epc_tcp"]), Tcp(ports["polarimeter_tcp"])));
+  for (StageConfig& stage : nominal.stages) {
+    stage.map = ControlMapConfig{};
+    stage.map.rad_per_unit = 0.6;
+  }
+  nominal.polarimeter_device->query = ":MEAS:BOTH?";
+  nominal.polarimeter_device->reply = PolarimeterDeviceConfig::Reply::kInputAndOutput;
+  const std::string nominal_path = dir_ + "/nominal.pbtxt";
+  std::ofstream(nominal_path) << ScenarioToText(nominal);
+  // What a lab's climate chamber or TEC client does: here, the emulator's control port.
+  const std::string set_temperature = dir_ + "/set_temperature.sh";
+  std::ofstream(set_temperature) << fmt::format(
+      "exec 3<>/dev/tcp/127.0.0.1/{}\nprintf 'temperature %s\\n' \"$1\" >&3\nIFS= read -r -t 5 reply <&3\n"
+      "echo \"$reply\" >&2\n[[ $reply == OK* ]]\n",
+      ports["control_tcp"].get<int>());
+
+  const std::string calibrated_path = dir_ + "/calibrated.pbtxt";
+  Process calibrate({DPC_BINARY, "calibrate", nominal_path, "-o", calibrated_path, "--json", "--temperatures-c",
+                     "35,15,25", "--operating-temperature-c", "30", "--condition-command",
+                     "bash " + set_temperature + " {value}"},
+                    dir_ + "/calibrate.out", dir_ + "/calibrate.log");
+  ASSERT_EQ(calibrate.Wait(300s), 0) << calibrate.Log() << Logs();
+  const json report = json::parse(calibrate.out());
+  ASSERT_EQ(report["conditions"].size(), 3u) << report.dump();
+  for (size_t c = 0; c < 3; ++c) {
+    EXPECT_EQ(report["conditions"][c]["temperature_c"].get<double>(), 15.0 + 10.0 * static_cast<double>(c));
+    EXPECT_LT(report["conditions"][c]["model_residual_rms_deg"].get<double>(), 0.5) << report.dump();
+  }
+  EXPECT_EQ(report["operating_temperature_c"].get<double>(), 30.0);
+  EXPECT_EQ(Status()["temperature_c"].get<double>(), 35.0);  // the last condition brought
+  EXPECT_NE(calibrate.Log().find("temperature 15 C"), std::string::npos) << calibrate.Log();
+
+  // The maps resolved at 30 °C against the emulator's truth there (θ·1.01), and what the table
+  // measured at 25 °C alone would be off by.
+  ScenarioConfig calibrated = LoadScenarioFile(calibrated_path);
+  ASSERT_EQ(calibrated.stages[0].map.kind, ControlMapConfig::Kind::kTablesByCondition);
+  EXPECT_EQ(calibrated.stages[0].map.operating_point, 30.0);
+  const WaveplateChain exact = BuildChain(truth.stages);
+  const auto error_deg = [&](const ScenarioConfig& scenario, double* worst) {
+    const WaveplateChain fitted = BuildChain(scenario.stages);
+    double sum_squares = 0.0;
+    int count = 0;
+    *worst = 0.0;
+    for (int k = 0; k <= 200; ++k) {
+      ChainPose a, b;
+      fitted.ComputePose(ControlVector::Constant(3, -10.0 + 0.1 * k), &a);
+      exact.ComputePose(ControlVector::Constant(3, -10.0 + 0.1 * k), &b);
+      for (size_t i = 0; i < 3; ++i) {
+        const double e = std::abs(a.angle_rad[i] - 1.01 * b.angle_rad[i]) * 180.0 / M_PI;
+        sum_squares += e * e;
+        *worst = std::max(*worst, e);
+        ++count;
+      }
+    }
+    return std::sqrt(sum_squares / count);
+  };
+  double worst = 0.0, worst_at_25 = 0.0;
+  const double rms = error_deg(calibrated, &worst);
+  ScenarioConfig at_25 = calibrated;
+  for (StageConfig& stage : at_25.stages) stage.map.operating_point = 25.0;
+  const double rms_at_25 = error_deg(at_25, &worst_at_25);
+  std::cerr << "maps at 30 °C: interpolated " << rms << "° rms (" << worst << "° max); the 25 °C tables "
+            << rms_at_25 << "° rms (" << worst_at_25 << "° max)\n";
+  EXPECT_LT(rms, 0.5);
+  EXPECT_LT(worst, 1.0);
+  EXPECT_GT(rms_at_25, 2.0 * rms);
+
+  // Refused before any instrument is touched: an operating point outside, no way to reach a
+  // condition without a terminal.
+  Process outside({DPC_BINARY, "calibrate", nominal_path, "-o", dir_ + "/x.pbtxt", "--temperatures-c", "15,25",
+                   "--operating-temperature-c", "40", "--condition-command", "true"},
+                  dir_ + "/outside.out", dir_ + "/outside.log");
+  EXPECT_EQ(outside.Wait(30s), 2) << outside.Log();
+  EXPECT_NE(outside.Log().find("outside the calibrated 15–25 °C"), std::string::npos) << outside.Log();
+  Process unattended({DPC_BINARY, "calibrate", nominal_path, "-o", dir_ + "/x.pbtxt", "--temperatures-c", "15,25"},
+                     dir_ + "/unattended.out", dir_ + "/unattended.log");
+  EXPECT_EQ(unattended.Wait(30s), 2) << unattended.Log();
+  EXPECT_NE(unattended.Log().find("needs --condition-command"), std::string::npos) << unattended.Log();
 }
 
 }  // namespace

@@ -9,10 +9,17 @@
 // every measured rotation. Each stage's map becomes a monotonic lookup table of retardance
 // against volts (from a least-squares polynomial through the measurements); the fit's residuals
 // are reported, and the scenario with the tables is written for the driver and the controllers.
+//
+// With --temperatures-c or --wavelengths-nm the whole calibration is repeated at each condition
+// (a shell command, or the person at the terminal, brings the device there first), and each
+// stage's map becomes tables keyed by the condition with an operating point: the driver and the
+// controllers use the table interpolated there (ResolveConditionTables, scenario_builders.h).
 
 #include <CLI/CLI.hpp>
 
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "dpc/cli/exit_code.h"
 
@@ -27,6 +34,12 @@ struct CalibrateOptions {
   double settle_s = 0.02;        ///< after setting a voltage, before reading
   double reference_v = 0.0;      ///< the other channels' voltage (clamped into each range)
   int degree = 5;                ///< of the polynomial the table is taken from
+  /// Calibrate at each of these (2 to 16; one of the two lists): the maps become tables keyed
+  /// by temperature or wavelength, resolved at the operating point (ResolveConditionTables).
+  std::vector<double> temperatures_c, wavelengths_nm;
+  std::string condition_command;           ///< brings the device to {value}; empty: ask at the terminal
+  double condition_settle_s = 0.0;         ///< after a condition is reached
+  std::optional<double> operating_point;   ///< °C or nm; default the first condition
   bool json = false;
 };
 
