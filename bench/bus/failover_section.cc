@@ -1,6 +1,6 @@
 // The failover section of dpc_bus_benchmark: kill -9 of the obeyed controller with a standby,
 // the gap between the last command of the killed one and the first of the standby applied by
-// the driver; beside the raw DDS reference, kill -9 of the stronger of two EXCLUSIVE-ownership
+// the driver (a stand-in, or after the switch; both as the states were published); beside the raw DDS reference, kill -9 of the stronger of two EXCLUSIVE-ownership
 // writers.
 
 #include <signal.h>
@@ -54,6 +54,17 @@ struct StateLog {
     reader.reset();
     participant.reset();
   }
+  /// The longest pause between consecutive samples published in [from_ns, to_ns], ns.
+  int64_t LongestSamplePauseNs(int64_t from_ns, int64_t to_ns) {
+    std::lock_guard<std::mutex> lock(mutex);
+    int64_t previous = 0, longest = 0;
+    for (const auto& [t, e] : errors_deg) {
+      if (t < from_ns || t > to_ns) continue;
+      if (previous != 0) longest = std::max(longest, t - previous);
+      previous = t;
+    }
+    return longest;
+  }
   /// The errors of the samples published in [from_ns, to_ns), sorted.
   std::vector<double> Errors(int64_t from_ns, int64_t to_ns) {
     std::lock_guard<std::mutex> lock(mutex);
@@ -67,8 +78,12 @@ struct StateLog {
   size_t AppliedBy(const std::string& id) {
     std::lock_guard<std::mutex> lock(mutex);
     size_t n = 0;
-    for (const auto& s : states) n += s.answers_sample() > 0 && s.obeyed_controller_id().to_string() == id;
+    for (const auto& s : states) n += s.answers_sample() > 0 && s.applied_controller_id().to_string() == id;
     return n;
+  }
+  uint64_t StandIns() {
+    std::lock_guard<std::mutex> lock(mutex);
+    return states.empty() ? 0 : states.back().stand_ins();
   }
   size_t Count() {
     std::lock_guard<std::mutex> lock(mutex);
@@ -105,7 +120,10 @@ void RunFailoverSection(const BusBenchmarkHarness& harness) {
                "{:.1f} ms, error excursion ≤ the steady-state p99, needless switches ≤ 1 per minute)\n",
                rate_hz * 1e-3, std::max(2.0, 3 * period_ms));
     std::vector<double> gaps_ms, excursion_over_p99;
+    std::vector<double> sample_pauses_ms;  ///< per run: the longest pause of the samples around the kill
+    std::vector<double> arrivals_ms;       ///< per run: when the standby's first applied answer had arrived
     size_t needless_switches = 0, needless_holds = 0;
+    uint64_t stand_ins_alive = 0;  ///< samples the primary answered late, the standby's answer applied
     double both_alive_s = 0.0;
     // Both alive for 1 s per run (quick) or 6 s (a minute over the ten runs), to count needless switches.
     const size_t warm_states = static_cast<size_t>(0.1 * rate_hz);
@@ -123,45 +141,56 @@ void RunFailoverSection(const BusBenchmarkHarness& harness) {
       }
       // Both alive: every turn to the standby now is a needless one (and a turn back).
       const size_t from = log.Count();
+      const uint64_t stand_ins_from = log.StandIns();
       const auto both_since = std::chrono::steady_clock::now();
       const int64_t both_since_ns = WallClockNs();
       Eventually([&] { return log.AppliedBy("primary") > warm_states + alive_states; }, 30s);
       const auto [turns, holds] = log.TurnsTo("standby", from);
       needless_switches += turns;
       needless_holds += holds;
+      stand_ins_alive += log.StandIns() - stand_ins_from;
       both_alive_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - both_since).count();
       const int64_t kill_ns = WallClockNs();
       const std::vector<double> steady = log.Errors(both_since_ns, kill_ns);
       primary.Signal(SIGKILL);
       const size_t before = log.AppliedBy("standby");
       Eventually([&] { return log.AppliedBy("standby") > before + static_cast<size_t>(0.2 * rate_hz); }, 10s);
-      int64_t last_primary_ns = 0, first_standby_ns = 0;
+      // The gap: from the last state applying the primary's command to the first applying the
+      // standby's (a stand-in or after the switch), both as published (when applied).
+      int64_t last_primary_ns = 0, first_standby_ns = 0, first_standby_received_ns = 0;
       {
         std::lock_guard<std::mutex> lock(log.mutex);
         for (const auto& s : log.states) {
-          if (s.answers_sample() > 0 && s.obeyed_controller_id().to_string() == "primary") {
-            last_primary_ns = s.command_receive_time_ns();
+          if (s.answers_sample() > 0 && s.applied_controller_id().to_string() == "primary") {
+            last_primary_ns = s.publish_time_ns();
           }
         }
         for (const auto& s : log.states) {
-          if (s.answers_sample() > 0 && s.obeyed_controller_id().to_string() == "standby" &&
-              s.command_receive_time_ns() > last_primary_ns) {
-            first_standby_ns = s.command_receive_time_ns();
+          if (s.answers_sample() > 0 && s.applied_controller_id().to_string() == "standby" &&
+              s.publish_time_ns() > last_primary_ns) {
+            first_standby_ns = s.publish_time_ns();
+            first_standby_received_ns = s.command_receive_time_ns();
             break;
           }
         }
       }
       if (first_standby_ns == 0) continue;
       gaps_ms.push_back(static_cast<double>(first_standby_ns - last_primary_ns) * 1e-6);
+      arrivals_ms.push_back(static_cast<double>(first_standby_received_ns - last_primary_ns) * 1e-6);
+      sample_pauses_ms.push_back(
+          static_cast<double>(log.LongestSamplePauseNs(last_primary_ns - 1'000'000, first_standby_ns)) * 1e-6);
       const std::vector<double> around = log.Errors(kill_ns, first_standby_ns + 20'000'000);
       if (!steady.empty() && !around.empty()) {
         const double p99 = steady[steady.size() * 99 / 100];
         excursion_over_p99.push_back(around.back() / p99);
       }
     }
+    fmt::print("  gaps (ms), in run order:{}\n  of which the standby's first applied answer had arrived after (ms):{}\n"
+               "  the longest pause of the samples from 1 ms before the primary's last state to the standby's first "
+               "(ms):{}\n",
+               GapList(gaps_ms), GapList(arrivals_ms), GapList(sample_pauses_ms));
     std::sort(gaps_ms.begin(), gaps_ms.end());
     std::sort(excursion_over_p99.begin(), excursion_over_p99.end());
-    fmt::print("  gaps (ms):{}\n", GapList(gaps_ms));
     if (!gaps_ms.empty()) {
       fmt::print("  median {:.2f} ms, worst {:.2f} ms ({:.1f} sample periods)\n", gaps_ms[gaps_ms.size() / 2],
                  gaps_ms.back(), gaps_ms.back() / period_ms);
@@ -172,9 +201,10 @@ void RunFailoverSection(const BusBenchmarkHarness& harness) {
                  GapList(excursion_over_p99), excursion_over_p99.back());
     }
     fmt::print("  while both controllers were alive ({:.1f} s): {} needless turns to the standby ({:.2f} per "
-               "minute), {} holds\n",
+               "minute), {} holds, {} samples stood in for ({:.3f} % of them)\n",
                both_alive_s, needless_switches, both_alive_s > 0 ? 60.0 * needless_switches / both_alive_s : 0.0,
-               needless_holds);
+               needless_holds, stand_ins_alive,
+               both_alive_s > 0 ? 100.0 * static_cast<double>(stand_ins_alive) / (both_alive_s * rate_hz) : 0.0);
   }
   std::vector<double> raw_gaps_ms = RawFailover(harness, std::max(3, repetitions / 2));
   std::sort(raw_gaps_ms.begin(), raw_gaps_ms.end());

@@ -1,6 +1,7 @@
 #include "controller_arbiter.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include <fmt/format.h>
@@ -28,10 +29,40 @@ ControllerArbiter::Liveness ControllerArbiter::Judge(const Record& record, int64
   return Lag(record) == 0 ? Liveness::kSilent : Liveness::kAlive;
 }
 
+int64_t ControllerArbiter::BehindGraceNs(const Record& record) const {
+  return static_cast<int64_t>(std::max(settings_.min_silence_s * 1e9, kBehindGraceIntervals * record.mean_interval_ns));
+}
+
 int64_t ControllerArbiter::BehindDueNs(const Record& record) const {
-  const int64_t grace_ns =
-      static_cast<int64_t>(std::max(settings_.min_silence_s * 1e9, kBehindGraceIntervals * record.mean_interval_ns));
-  return std::max(BehindSinceNs(record), record.last_command_ns) + grace_ns;
+  return std::max(BehindSinceNs(record), record.last_command_ns) + BehindGraceNs(record);
+}
+
+void ControllerArbiter::NoteLateness(Record* record, uint64_t answers_sample, int64_t now_ns) const {
+  // Behind the sample's first answer (0 if this is the first); a sample too old to remember
+  // says nothing.
+  double lateness_ns = 0.0;
+  if (answers_sample <= newest_answered_) {
+    const FirstAnswer& entry = first_answers_[answers_sample % kAnswerRing];
+    if (entry.sample != answers_sample) return;
+    lateness_ns = static_cast<double>(std::max<int64_t>(0, now_ns - entry.time_ns));
+  }
+  const double deviation_ns = std::abs(lateness_ns - record->lateness_mean_ns);
+  record->lateness_mean_ns += kIntervalSmoothing * (lateness_ns - record->lateness_mean_ns);
+  record->lateness_deviation_ns += kIntervalSmoothing * (deviation_ns - record->lateness_deviation_ns);
+}
+
+uint64_t ControllerArbiter::LastAnswered(const std::string& id) const {
+  const auto found = controllers_.find(id);
+  return found == controllers_.end() ? 0 : found->second.last_answered;
+}
+
+int64_t ControllerArbiter::StandInWaitNs() const {
+  if (obeyed_.empty()) return 0;
+  const Record& record = controllers_.at(obeyed_);
+  const double wait_ns =
+      record.lateness_mean_ns + kStandInDeviations * record.lateness_deviation_ns + kStandInMarginNs;
+  const int64_t longest_ns = std::max(kMinStandInWaitNs, std::min(kMaxStandInWaitNs, BehindGraceNs(record) / 2));
+  return std::clamp(static_cast<int64_t>(std::min(wait_ns, 9e18)), kMinStandInWaitNs, longest_ns);
 }
 
 int64_t ControllerArbiter::BehindSinceNs(const Record& record) const {
@@ -130,6 +161,7 @@ ControllerArbiter::Verdict ControllerArbiter::OnCommand(const std::string& id, i
   record.priority = priority;
   record.last_command_ns = now_ns;
   ++record.commands;
+  NoteLateness(&record, answers_sample, now_ns);
   NoteAnswer(&record, answers_sample, now_ns);
   if (id == obeyed_) return Verdict::kObey;
 

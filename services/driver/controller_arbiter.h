@@ -19,6 +19,13 @@
 //     first after a stall took over, and the primary took back over at once.
 // Check() runs when the next such deadline is due (NextCheckNs).
 //
+// Stand-ins. Between a controller's death and its replacement (the grace above) the driver
+// need not go without commands: when another controller answered a sample and the obeyed one
+// has not answered it StandInWaitNs() later, the driver applies that answer in its place
+// (DriverCore). The wait follows how late the obeyed controller usually answers behind the
+// first answer of a sample (an average and its mean deviation), so a primary that is merely
+// slower than its standby is not stood in for at every sample.
+//
 // Bounded: at most kMaxControllers records (a newcomer beyond them is refused while every
 // known controller is alive; else the longest-silent record makes room), and the first answers
 // of the latest kAnswerRing samples; no number a command carries makes it loop or overflow.
@@ -33,7 +40,7 @@ namespace dpc::services {
 class ControllerArbiter {
  public:
   struct Settings {
-    double min_silence_s = 1.2e-3;   ///< the grace of a controller behind the others (see above)
+    double min_silence_s = 10e-3;    ///< the grace of a controller behind the others (see above)
     double silence_intervals = 8.0;  ///< a silence of nobody longer than this many intervals: hold
   };
   static constexpr size_t kMaxControllers = 64;
@@ -41,6 +48,13 @@ class ControllerArbiter {
   /// min_silence_s.
   static constexpr double kBehindGraceIntervals = 1.5;
   static constexpr size_t kAnswerRing = 1024;
+  /// The stand-in wait: the obeyed controller's usual lateness behind a sample's first answer
+  /// plus kStandInDeviations of its mean deviation and a margin, at least kMinStandInWaitNs and
+  /// at most kMaxStandInWaitNs or half its behind grace.
+  static constexpr int64_t kMinStandInWaitNs = 200'000;
+  static constexpr int64_t kMaxStandInWaitNs = 600'000;
+  static constexpr int64_t kStandInMarginNs = 100'000;
+  static constexpr double kStandInDeviations = 4.0;
 
   /// What to do with a command.
   enum class Verdict {
@@ -74,6 +88,11 @@ class ControllerArbiter {
   uint64_t refused() const { return refused_; }
   /// Why it obeys whom it obeys, or why it holds.
   const std::string& reason() const { return reason_; }
+  /// The newest sample `id` answered (0: none, or unknown).
+  uint64_t LastAnswered(const std::string& id) const;
+  /// How long after another controller's answer the obeyed controller's answer to the same
+  /// sample is waited for before the other one stands in (see above); 0 while holding.
+  int64_t StandInWaitNs() const;
 
  private:
   struct Record {
@@ -82,6 +101,10 @@ class ControllerArbiter {
     double mean_interval_ns = 0.0;    ///< exponential average; 0 until two commands
     uint64_t commands = 0;
     uint64_t last_answered = 0;       ///< the newest sample it answered
+    /// How late it answers a sample after the sample's first answer: exponential averages of
+    /// the lateness and of its absolute deviation from that average.
+    double lateness_mean_ns = 0.0;
+    double lateness_deviation_ns = 0.0;
   };
   /// kBehind (dead): another controller answered a sample it has not, and it has been silent
   /// for the grace since then; kSilent: silent for its timeout and nobody answered anything
@@ -102,6 +125,9 @@ class ControllerArbiter {
   /// When it counts as behind: the grace after the later of BehindSinceNs and its last command.
   int64_t BehindDueNs(const Record& record) const;
   int64_t SilenceTimeoutNs(const Record& record) const;
+  int64_t BehindGraceNs(const Record& record) const;
+  /// Updates the record's lateness with its answer to `answers_sample` arriving at `now_ns`.
+  void NoteLateness(Record* record, uint64_t answers_sample, int64_t now_ns) const;
   /// "<id> silent for X ms, N samples behind".
   std::string DescribeBehind(const std::string& id, const Record& record, int64_t now_ns) const;
   void NoteAnswer(Record* record, uint64_t answers_sample, int64_t now_ns);

@@ -62,6 +62,8 @@ DriverCore::DriverCore(std::vector<StageConfig> stages, DriverSettings settings,
 bool DriverCore::OnSample(uint64_t sequence, int64_t sample_time_ns, int64_t publish_time_ns) {
   if (!timeline_.OnSample(sequence, sample_time_ns, publish_time_ns)) return false;
   arbiter_.OnBenchRestart();  // a new bench run numbers its samples from 1 again
+  newest_answered_ = 0;
+  stand_in_.reset();
   return true;
 }
 
@@ -73,6 +75,7 @@ void DriverCore::StopMotion() {
 void DriverCore::Answer(uint64_t sample_number, int64_t wall_ns) {
   // The sample's times from the bench's own record, not from the command.
   answers_sample_ = sample_number;
+  newest_answered_ = std::max(newest_answered_, sample_number);
   const std::optional<SampleTimeline::Sample> sample = timeline_.Find(answers_sample_);
   sample_time_ns_ = sample ? sample->time_ns : timeline_.TimeOfNs(answers_sample_);
   sample_publish_time_ns_ = sample ? sample->publish_time_ns : 0;
@@ -113,28 +116,58 @@ std::optional<DriverState> DriverCore::OnCommand(const ControllerCommand& comman
       Reject(id, fmt::format("{} controllers already on this bench", ControllerArbiter::kMaxControllers));
       return std::nullopt;
     case ControllerArbiter::Verdict::kIgnore:
-      KeepStandbyCommand(command);
-      return std::nullopt;
+      KeepStandbyCommand(command, wall_ns);
+      return ConsiderStandIn(command, now_ns, wall_ns);
     case ControllerArbiter::Verdict::kAnswerOnly:
-      KeepStandbyCommand(command);
+      KeepStandbyCommand(command, wall_ns);
       Answer(command.answers_sample, wall_ns);
       return Publishable(wall_ns);
     case ControllerArbiter::Verdict::kObey:
       break;
   }
   standby_commands_.erase(id);
+  if (stand_in_ && stand_in_->command.answers_sample <= command.answers_sample) stand_in_.reset();
+  // A stand-in answered a newer sample: this late answer would move the waveplates back.
+  if (command.answers_sample < newest_answered_) return std::nullopt;
   return Apply(command, now_ns, wall_ns);
 }
 
-void DriverCore::KeepStandbyCommand(const ControllerCommand& command) {
+std::optional<DriverState> DriverCore::ConsiderStandIn(const ControllerCommand& command, int64_t now_ns,
+                                                       int64_t wall_ns) {
+  const uint64_t sample = command.answers_sample;
+  if (arbiter_.holding() || sample <= newest_answered_ || arbiter_.LastAnswered(arbiter_.obeyed()) >= sample) {
+    return std::nullopt;
+  }
+  if (!stand_in_) {
+    stand_in_ = StandIn{command, wall_ns, now_ns + arbiter_.StandInWaitNs()};
+    return std::nullopt;
+  }
+  // The newest answer stands in when the wait for the oldest one the obeyed controller owes is
+  // over (the wait does not start again with every sample).
+  const ControllerCommand& kept = stand_in_->command;
+  if (kept.answers_sample > sample || (kept.answers_sample == sample && kept.priority >= command.priority)) {
+    return std::nullopt;
+  }
+  if (now_ns >= stand_in_->due_ns) {
+    stand_in_.reset();
+    ++stand_ins_;
+    return Apply(command, now_ns, wall_ns);
+  }
+  stand_in_->command = command;
+  stand_in_->received_wall_ns = wall_ns;
+  return std::nullopt;
+}
+
+void DriverCore::KeepStandbyCommand(const ControllerCommand& command, int64_t wall_ns) {
   if (standby_commands_.size() >= ControllerArbiter::kMaxControllers &&
       !standby_commands_.count(command.controller_id)) {
     standby_commands_.clear();  // only the controllers that still send come back
   }
-  standby_commands_[command.controller_id] = command;
+  standby_commands_[command.controller_id] = Received{command, wall_ns};
 }
 
-DriverState DriverCore::Apply(const ControllerCommand& command, int64_t now_ns, int64_t wall_ns) {
+DriverState DriverCore::Apply(const ControllerCommand& command, int64_t now_ns, int64_t received_wall_ns) {
+  const int64_t wall_ns = received_wall_ns;
   const std::string& id = command.controller_id;
   // Apply: clamp to the ranges, then limit the slew over the driver's own time since the last
   // applied command (never the command's timestamps), from where the current motion has the
@@ -185,6 +218,7 @@ DriverState DriverCore::Apply(const ControllerCommand& command, int64_t now_ns, 
     return Publishable(wall_ns);
   }
   applied_ = backend_->Applied();
+  applied_by_ = id;
   applied_any_ = true;
   last_applied_ns_ = now_ns;
   ++applied_count_;
@@ -204,6 +238,17 @@ std::optional<DriverState> DriverCore::Tick(int64_t now_ns, int64_t wall_ns) {
       return Publishable(wall_ns);
     }
   }
+  if (!arbiter_.holding() && stand_in_ && now_ns >= stand_in_->due_ns) {
+    // The obeyed controller still owes the sample: the standby's answer stands in.
+    const StandIn stand_in = *stand_in_;
+    const ControllerCommand& command = stand_in.command;
+    stand_in_.reset();
+    if (arbiter_.LastAnswered(arbiter_.obeyed()) < command.answers_sample &&
+        command.answers_sample > newest_answered_ && timeline_.Find(command.answers_sample)) {
+      ++stand_ins_;
+      return Apply(command, now_ns, stand_in.received_wall_ns);
+    }
+  }
   if (!arbiter_.holding()) {
     if (!arbiter_.Check(now_ns)) return std::nullopt;
     // The obeyed controller fell silent: another one is obeyed, or the driver holds.
@@ -214,11 +259,13 @@ std::optional<DriverState> DriverCore::Tick(int64_t now_ns, int64_t wall_ns) {
     }
     // Failover: the new controller's latest command is applied now, not at its next one (a
     // sample period later), if it answers a sample the bench still knows.
+    stand_in_.reset();
     const auto latest = standby_commands_.find(arbiter_.obeyed());
-    if (latest != standby_commands_.end() && timeline_.Find(latest->second.answers_sample)) {
-      const ControllerCommand command = latest->second;
+    if (latest != standby_commands_.end() && latest->second.command.answers_sample > newest_answered_ &&
+        timeline_.Find(latest->second.command.answers_sample)) {
+      const Received received = latest->second;
       standby_commands_.erase(latest);
-      return Apply(command, now_ns, wall_ns);
+      return Apply(received.command, now_ns, received.wall_ns);
     }
     return Publishable(wall_ns);
   }
@@ -232,7 +279,9 @@ std::optional<DriverState> DriverCore::Tick(int64_t now_ns, int64_t wall_ns) {
 }
 
 int64_t DriverCore::NextTickNs() const {
-  if (!arbiter_.holding()) return arbiter_.NextCheckNs();
+  if (!arbiter_.holding()) {
+    return stand_in_ ? std::min(stand_in_->due_ns, arbiter_.NextCheckNs()) : arbiter_.NextCheckNs();
+  }
   return last_state_ns_ + static_cast<int64_t>(settings_.holding_state_period_s * 1e9);
 }
 
@@ -263,6 +312,8 @@ DriverState DriverCore::State(int64_t wall_ns) const {
   state.commands_limited = limited_;
   state.controller_switches = arbiter_.switches();
   state.last_rejection = last_rejection_;
+  state.applied_controller_id = applied_by_;
+  state.stand_ins = stand_ins_;
   return state;
 }
 

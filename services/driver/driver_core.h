@@ -26,6 +26,16 @@
 // reaches its range end (a stage already at its end with φ̇ pointing out gets no rate), and
 // |φ̇| ≤ the slew limit. Holding turns the motion into the point where it ends, with no rate.
 //
+// Stand-ins. When a standby answered a sample and the obeyed controller has not answered it
+// ControllerArbiter::StandInWaitNs() later (its usual lateness and a margin), the standby's
+// answer is applied in its place (by the ticker when the wait is over, or as the standby's next
+// answer arrives if the ticker woke late), checked, clamped and slew-limited as any other; the state
+// names whose command it applied (applied_controller_id) and counts the stand-ins. So the
+// waveplates never wait for the arbiter's grace: a killed controller's commands are replaced
+// one wait after the standby's next answer, and a primary that is late once loses that sample
+// only, not control. An answer to a sample older than one already answered is not applied (the
+// waveplates never go back in bench time).
+//
 // Bumpless switching is the controllers' part: a standby controller follows the applied φ from
 // the state, so its first obeyed command continues from there.
 
@@ -48,7 +58,7 @@ namespace dpc::services {
 struct DriverSettings {
   std::string driver_id = "driver";
   double max_slew_per_s = 0.0;        ///< φ units per second; 0: the device's own limit
-  double min_silence_s = 1.2e-3;      ///< the grace of a controller behind the others (ControllerArbiter)
+  double min_silence_s = 10e-3;       ///< the grace of a controller behind the others (ControllerArbiter)
   double silence_intervals = 8.0;     ///< or this many of its command intervals, if longer
   double holding_state_period_s = 5e-3;  ///< state heartbeat while holding
   double max_ramp_s = 2e-3;           ///< a command's rate moves φ for at most this (bench time)
@@ -114,10 +124,18 @@ class DriverCore {
   void Answer(uint64_t sample, int64_t wall_ns);
   /// Sets the backend's motion to where it ends, with no rate (holding).
   void StopMotion();
-  /// Clamps, slew-limits and applies the obeyed controller's command; the state to publish.
-  DriverState Apply(const ControllerCommand& command, int64_t now_ns, int64_t wall_ns);
-  /// Remembers a standby's latest command: applied at once if the standby takes over.
-  void KeepStandbyCommand(const ControllerCommand& command);
+  /// Clamps, slew-limits and applies a command (the obeyed controller's, or a standby's
+  /// standing in or taking over) at `now_ns`; `received_wall_ns`: when it arrived (the state's
+  /// command_receive_time_ns). The state to publish.
+  DriverState Apply(const ControllerCommand& command, int64_t now_ns, int64_t received_wall_ns);
+  /// Remembers a standby's latest command (arrived at `wall_ns`): applied at once if the standby
+  /// takes over.
+  void KeepStandbyCommand(const ControllerCommand& command, int64_t wall_ns);
+  /// A standby's command (arrived at `now_ns`) for a sample the obeyed controller has not
+  /// answered: kept to stand in for it when the wait is over, or applied now if the wait for an
+  /// older sample the obeyed controller still owes is already over (the ticker may not have run:
+  /// a busy machine wakes it late). The state to publish, if it was applied.
+  std::optional<DriverState> ConsiderStandIn(const ControllerCommand& command, int64_t now_ns, int64_t wall_ns);
 
   WaveplateChain chain_;
   DriverSettings settings_;
@@ -126,7 +144,20 @@ class DriverCore {
   SampleTimeline timeline_;            ///< the bench's samples, as the polarimeter published them
   double max_slew_per_s_ = 0.0;        ///< the device's limit, or the setting if lower
   ControllerArbiter arbiter_;
-  std::map<std::string, ControllerCommand> standby_commands_;  ///< each standby's latest
+  struct Received {
+    ControllerCommand command;
+    int64_t wall_ns = 0;  ///< when it arrived
+  };
+  std::map<std::string, Received> standby_commands_;  ///< each standby's latest
+  struct StandIn {
+    ControllerCommand command;
+    int64_t received_wall_ns = 0;
+    int64_t due_ns = 0;  ///< applied then if the obeyed controller has not answered its sample
+  };
+  std::optional<StandIn> stand_in_;
+  uint64_t stand_ins_ = 0;
+  std::string applied_by_;            ///< whose command the applied φ came from
+  uint64_t newest_answered_ = 0;      ///< the newest sample a state answered (this bench run)
   WaveplateMotion applied_;         ///< what the backend does (its Applied())
   std::array<bool, kMaxControls> saturated_{};
   int64_t last_applied_ns_ = 0;       ///< the driver's clock when the last command was applied

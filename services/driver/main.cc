@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cmath>
 #include <memory>
+#include <condition_variable>
 #include <mutex>
 
 #include <spdlog/spdlog.h>
@@ -59,7 +60,8 @@ class DriverService final : public Service {
         ->check(CLI::NonNegativeNumber)->capture_default_str();
     app.add_option("--min-silence-s", s.min_silence_s,
                    "The obeyed controller is dead when another answered a sample it did not and it stayed "
-                   "silent this long since (or 1.5 of its command intervals, if longer): fail over. "
+                   "silent this long since (or 1.5 of its command intervals, if longer): fail over. Meanwhile "
+                   "the other controller's answers stand in for the samples it owes. "
                    "If nobody answers for this long or --silence-intervals of the command interval "
                    "(no samples, no other controller), hold; the controller obeyed before gets "
                    "control back first")
@@ -81,7 +83,7 @@ class DriverService final : public Service {
 
   DriverService(const CommonOptions& common, const Options& options)
       : bench_id_(common.bench_id),
-        tick_s_(options.tick_s),
+        tick_ns_(static_cast<int64_t>(options.tick_s * 1e9)),
         scenario_(LoadDriverScenario(common)),
         record_(scenario_.waveplate_device ? nullptr : MakeRecord(common, options, scenario_)),
         backend_(MakeBackend(scenario_, record_.get())),
@@ -136,23 +138,23 @@ class DriverService final : public Service {
     samples_.reset();
   }
 
-  /// The ticker: wakes when the obeyed controller's silence deadline (or the holding heartbeat)
-  /// is due, at most every --tick-s (while commands flow, about once per silence timeout), and
-  /// at once on stop().
+  /// The ticker: wakes when the core's next deadline is due (a stand-in's wait, the obeyed
+  /// controller's grace or silence timeout, the holding heartbeat), at most every --tick-s; a
+  /// command that brings the deadline forward wakes it (WakeTickerIfSooner), and stop() at once.
   cli::ExitCode run() override {
-    const int64_t tick_ns = static_cast<int64_t>(tick_s_ * 1e9);
     constexpr int64_t kMaxSleepNs = 5'000'000;
-    for (;;) {
-      int64_t due_ns;
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        const int64_t now_ns = MonotonicNs();
-        core_.SetControllersConnected(commands_->counters().matched_writers.load(std::memory_order_relaxed));
-        if (auto state = core_.Tick(now_ns, WallClockNs())) Publish(std::move(*state));
-        due_ns = std::clamp(core_.NextTickNs(), now_ns + tick_ns, now_ns + kMaxSleepNs);
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (!stopped()) {
+      const int64_t now_ns = MonotonicNs();
+      core_.SetControllersConnected(commands_->counters().matched_writers.load(std::memory_order_relaxed));
+      if (auto state = core_.Tick(now_ns, WallClockNs())) Publish(std::move(*state));
+      last_tick_ns_ = now_ns;
+      tick_due_ns_ = std::clamp(core_.NextTickNs(), now_ns + tick_ns_, now_ns + kMaxSleepNs);
+      while (!stopped() && MonotonicNs() < tick_due_ns_) {
+        tick_wake_.wait_until(lock, std::chrono::steady_clock::time_point(std::chrono::nanoseconds(tick_due_ns_)));
       }
-      if (WaitForStopUntil(std::chrono::steady_clock::time_point(std::chrono::nanoseconds(due_ns)))) break;
     }
+    lock.unlock();
     if (const auto* line = dynamic_cast<const LineWaveplates*>(backend_.get())) {
       const LineWaveplates::Counters c = line->counters();
       const auto [p50_us, p99_us] = line->ApplyTimesUs();
@@ -268,7 +270,21 @@ class DriverService final : public Service {
                      : core_.OnMalformedCommand(command_.controller_id, command_.answers_sample, malformed, wall_ns);
     if (state) Publish(std::move(*state));
     rejections_.Update(core_.commands_rejected(), core_.last_rejection());
+    WakeTickerIfSooner();
   }
+
+  /// Under mutex_: a command may have brought the core's next deadline forward (a standby
+  /// answered a sample the obeyed controller owes): the ticker must not sleep past it.
+  void WakeTickerIfSooner() {
+    const int64_t due_ns = std::max(core_.NextTickNs(), last_tick_ns_ + tick_ns_);
+    if (due_ns >= tick_due_ns_) return;
+    tick_due_ns_ = due_ns;
+    tick_wake_.notify_one();
+  }
+
+  /// Without mutex_ (stop() may come from a callback that holds it): a wake-up lost between the
+  /// ticker's check and its wait costs at most its longest sleep.
+  void OnStop() override { tick_wake_.notify_all(); }
 
   void OnTarget(const msg::Target& message, const fdds::SampleInfo& info) {
     const auto writer = info.sample_identity.writer_guid();
@@ -327,7 +343,11 @@ class DriverService final : public Service {
   }
 
   std::string bench_id_;
-  double tick_s_;
+  int64_t tick_ns_;
+  // The ticker's schedule, under mutex_.
+  std::condition_variable tick_wake_;
+  int64_t tick_due_ns_ = 0;
+  int64_t last_tick_ns_ = 0;
   ScenarioConfig scenario_;
   std::unique_ptr<DeviceRecord> record_;
   std::unique_ptr<WaveplateBackend> backend_;

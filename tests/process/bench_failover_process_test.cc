@@ -2,6 +2,7 @@
 // of the obeyed controller hands control to the standby, and with no controller the driver
 // holds, says why, and resumes. Real processes on loopback, each test on its own DDS domain.
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -94,19 +95,21 @@ TEST_F(BenchFailoverTest, KillNineOfTheObeyedControllerHandsControlToTheStandby)
     Failover f;
     int64_t last_primary_ns = 0, first_standby_ns = 0;
     size_t last_primary = 0, first_standby = 0;
+    // The gap: from the last state applying the primary's command to the first applying the
+    // standby's (standing in, or obeyed), as published (when applied).
     for (size_t i = 0; i < states.size(); ++i) {
       const auto& s = states[i].state;
-      if (s.answers_sample() > 0 && s.obeyed_controller_id().to_string() == primary_id) {
-        last_primary_ns = s.command_receive_time_ns();
+      if (s.answers_sample() > 0 && s.applied_controller_id().to_string() == primary_id) {
+        last_primary_ns = s.publish_time_ns();
         last_primary = i;
       }
     }
     for (size_t i = last_primary + 1; i < states.size(); ++i) {
       const auto& s = states[i].state;
       // (The driver's own switch notice repeats the primary's last command: skip it.)
-      if (s.answers_sample() > 0 && s.obeyed_controller_id().to_string() == "standby" &&
-          s.command_receive_time_ns() > last_primary_ns) {
-        first_standby_ns = s.command_receive_time_ns();
+      if (s.answers_sample() > 0 && s.applied_controller_id().to_string() == "standby" &&
+          s.publish_time_ns() > last_primary_ns) {
+        first_standby_ns = s.publish_time_ns();
         first_standby = i;
         f.switch_step = MaxAbsDifference(states[last_primary].state.phi_applied(), s.phi_applied());
         break;
@@ -129,6 +132,16 @@ TEST_F(BenchFailoverTest, KillNineOfTheObeyedControllerHandsControlToTheStandby)
         << states[first_standby].state.answers_sample() << ", samples published in the gap "
         << ErrorsDeg(last_primary_ns, first_standby_ns).size() << ", driver states:";
     for (const auto& [reason, count] : reasons) out << "\n  " << count << " × " << reason;
+    out << "\nstates (ms after the primary's last, applied by, answers):";
+    for (size_t i = last_primary; i <= first_standby; ++i) {
+      const auto& s = states[i].state;
+      out << fmt::format(" {:.2f} {} #{};", static_cast<double>(s.publish_time_ns() - last_primary_ns) * 1e-6,
+                         s.applied_controller_id().to_string(), s.answers_sample());
+    }
+    out << "\nsamples (ms after the primary's last state):";
+    for (const auto& [t_ns, error] : ErrorsWithTimes(last_primary_ns, first_standby_ns)) {
+      out << fmt::format(" {:.2f}", static_cast<double>(t_ns - last_primary_ns) * 1e-6);
+    }
     f.during = out.str();
     return f;
   };

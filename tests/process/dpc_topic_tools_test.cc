@@ -207,10 +207,11 @@ TEST_F(DpcTopicToolsTest, EchoStateJsonPrintsCompleteObjects) {
                             "phi_applied", "phi_rate_per_s", "ramp_start_time_ns",
                             "ramp_end_time_ns", "saturated", "mode", "reason", "obeyed_controller_id",
                             "obeyed_priority", "commands_applied", "commands_rejected",
-                            "commands_limited", "controller_switches", "last_rejection"}) {
+                            "commands_limited", "controller_switches", "last_rejection",
+                            "applied_controller_id", "stand_ins"}) {
       EXPECT_TRUE(j.contains(key)) << key << " missing in " << line;
     }
-    EXPECT_EQ(j.size(), 21u) << line;
+    EXPECT_EQ(j.size(), 23u) << line;
     EXPECT_EQ(j["bench_id"], "bench1");
     ASSERT_TRUE(j["phi_applied"].is_array());
     EXPECT_EQ(j["phi_applied"].size(), 3u) << line;  // the default bench: 3 stages

@@ -133,6 +133,15 @@ class BenchFixture : public ::testing::Test {
     std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
     return errors[errors.size() / 2];
   }
+  /// (publish time, output error) of the samples published in [from_ns, to_ns] (wall clock).
+  std::vector<std::pair<int64_t, double>> ErrorsWithTimes(int64_t from_ns, int64_t to_ns) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::vector<std::pair<int64_t, double>> out;
+    for (const auto& [t, e] : sample_errors_) {
+      if (t >= from_ns && t <= to_ns) out.emplace_back(t, e);
+    }
+    return out;
+  }
   /// The output errors of the samples published in [from_ns, to_ns] (wall clock).
   std::vector<double> ErrorsDeg(int64_t from_ns, int64_t to_ns) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -143,10 +152,11 @@ class BenchFixture : public ::testing::Test {
     return errors;
   }
   /// Applied states obeying `id` seen so far.
+  /// States that applied a command of `id` (obeyed, or standing in).
   size_t AppliedBy(const std::string& id) {
     std::lock_guard<std::mutex> lock(mutex_);
     size_t n = 0;
-    for (const auto& s : seen_) n += s.state.obeyed_controller_id().to_string() == id && s.state.answers_sample() > 0;
+    for (const auto& s : seen_) n += s.state.applied_controller_id().to_string() == id && s.state.answers_sample() > 0;
     return n;
   }
 

@@ -198,7 +198,9 @@ Json ToJson(const msg::WaveplateState& m) {
               {"commands_rejected", m.commands_rejected()},
               {"commands_limited", m.commands_limited()},
               {"controller_switches", m.controller_switches()},
-              {"last_rejection", Text(m.last_rejection())}};
+              {"last_rejection", Text(m.last_rejection())},
+              {"applied_controller_id", Text(m.applied_controller_id())},
+              {"stand_ins", m.stand_ins()}};
 }
 
 Json ToJson(const msg::ControllerStatus& m) {
@@ -320,7 +322,7 @@ std::string ToText(const msg::WaveplateState& m) {
   const std::string obeyed = Text(m.obeyed_controller_id());
   return fmt::format(
       "[{}] state #{} {} obeyed={} (priority {}) phi_applied={}{}{} answers sample #{} t={:.6f} s "
-      "applied={} rejected={} limited={} switches={}{}",
+      "applied={} rejected={} limited={} switches={}{}{}",
       Text(m.bench_id()), m.sequence_number(), active ? "ACTIVE" : "HOLDING",
       obeyed.empty() ? "-" : obeyed, m.obeyed_priority(), Values(m.phi_applied()),
       m.phi_rate_per_s().empty()
@@ -330,6 +332,7 @@ std::string ToText(const msg::WaveplateState& m) {
       saturated.empty() ? "" : " saturated=[" + saturated + "]", m.answers_sample(),
       Seconds(m.sample_time_ns()), m.commands_applied(), m.commands_rejected(),
       m.commands_limited(), m.controller_switches(),
+      m.stand_ins() == 0 ? "" : fmt::format(" stand_ins={} (last from {})", m.stand_ins(), Text(m.applied_controller_id())),
       m.reason().size() == 0 ? "" : " reason=\"" + Text(m.reason()) + "\"");
 }
 

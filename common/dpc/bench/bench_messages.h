@@ -67,6 +67,10 @@ struct DriverState {
   uint64_t commands_limited = 0;
   uint64_t controller_switches = 0;
   std::string last_rejection;
+  /// Whose command `motion` came from: the obeyed controller's, or a standby's standing in for
+  /// a sample the obeyed one had not answered in time ("" before any).
+  std::string applied_controller_id;
+  uint64_t stand_ins = 0;         ///< standby answers applied in place of a late one
 
   int control_count() const { return static_cast<int>(motion.phi.size()); }
   bool any_saturated() const {

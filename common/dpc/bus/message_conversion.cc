@@ -284,6 +284,8 @@ std::string ReadState(const msg::WaveplateState& message, int control_count, Dri
   out->commands_limited = message.commands_limited();
   out->controller_switches = message.controller_switches();
   out->last_rejection.assign(message.last_rejection().c_str(), message.last_rejection().size());
+  out->applied_controller_id.assign(message.applied_controller_id().c_str(), message.applied_controller_id().size());
+  out->stand_ins = message.stand_ins();
   return {};
 }
 
@@ -314,6 +316,8 @@ void WriteState(const DriverState& state, const std::string& bench_id, msg::Wave
   out->commands_limited(state.commands_limited);
   out->controller_switches(state.controller_switches);
   out->last_rejection(state.last_rejection.substr(0, 255));
+  out->applied_controller_id(state.applied_controller_id.substr(0, 63));
+  out->stand_ins(state.stand_ins);
 }
 
 msg::DeviceDescription DeviceMessage(const DeviceDescription& device, const std::string& bench_id) {

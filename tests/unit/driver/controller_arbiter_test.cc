@@ -13,7 +13,7 @@ using Verdict = ControllerArbiter::Verdict;
 
 class ControllerArbiterTest : public ::testing::Test {
  protected:
-  ControllerArbiter arbiter_{ControllerArbiter::Settings{}};  // 1.2 ms, 8 intervals
+  ControllerArbiter arbiter_{ControllerArbiter::Settings{1.2e-3, 8.0}};  // the mechanics at a short grace
 
   /// Primary (priority 10) and standby (0) answer samples first … last at 10 kHz. Returns the
   /// time of the last sample.
@@ -121,6 +121,45 @@ TEST_F(ControllerArbiterTest, AStandbyOneSampleAheadAllTheTimeIsNoFailure) {
     EXPECT_FALSE(arbiter_.Check(t + 80 * kUs));
     ASSERT_EQ(arbiter_.obeyed(), "primary") << "sample " << k;
   }
+}
+
+TEST_F(ControllerArbiterTest, TheStandInWaitFollowsHowLateTheObeyedControllerUsuallyAnswers) {
+  // The primary answers every sample 160 µs after the standby: the wait is that, its deviation
+  // (none once steady) and the margin, so its answers are waited for; a primary that answers
+  // first gets the least wait; none is longer than half the grace.
+  EXPECT_EQ(arbiter_.StandInWaitNs(), 0) << "holding";
+  int64_t t = 0;
+  for (int k = 1; k <= 200; ++k, t += 100 * kUs) {
+    arbiter_.OnCommand("standby", 0, k + 1, t);
+    arbiter_.OnCommand("primary", 10, k, t + 60 * kUs);
+  }
+  EXPECT_EQ(arbiter_.LastAnswered("primary"), 200u);
+  EXPECT_EQ(arbiter_.LastAnswered("nobody"), 0u);
+  EXPECT_NEAR(static_cast<double>(arbiter_.StandInWaitNs()), 260e3, 15e3);
+  ControllerArbiter first{ControllerArbiter::Settings{1.2e-3, 8.0}};
+  for (int k = 1; k <= 50; ++k) {
+    first.OnCommand("primary", 10, k, k * 100 * kUs);
+    first.OnCommand("standby", 0, k, k * 100 * kUs + 10 * kUs);
+  }
+  EXPECT_EQ(first.StandInWaitNs(), ControllerArbiter::kMinStandInWaitNs);
+  ControllerArbiter slow{ControllerArbiter::Settings{1.2e-3, 8.0}};
+  for (int k = 1; k <= 50; ++k) {
+    slow.OnCommand("standby", 0, k, k * 100 * kUs);
+    slow.OnCommand("primary", 10, k, k * 100 * kUs + 5 * kMs);
+  }
+  EXPECT_EQ(slow.StandInWaitNs(), 600 * kUs) << "half the 1.2-ms grace";
+  ControllerArbiter short_grace{ControllerArbiter::Settings{0.6e-3, 8.0}};
+  for (int k = 1; k <= 50; ++k) {
+    short_grace.OnCommand("standby", 0, k, k * 100 * kUs);
+    short_grace.OnCommand("primary", 10, k, k * 100 * kUs + 5 * kMs);
+  }
+  EXPECT_EQ(short_grace.StandInWaitNs(), 300 * kUs) << "half the 0.6-ms grace";
+  ControllerArbiter default_grace{ControllerArbiter::Settings{}};
+  for (int k = 1; k <= 50; ++k) {
+    default_grace.OnCommand("standby", 0, k, k * 100 * kUs);
+    default_grace.OnCommand("primary", 10, k, k * 100 * kUs + 5 * kMs);
+  }
+  EXPECT_EQ(default_grace.StandInWaitNs(), ControllerArbiter::kMaxStandInWaitNs) << "not half the 10-ms grace";
 }
 
 TEST_F(ControllerArbiterTest, AStallOfEveryoneHoldsThenGivesControlBackToTheSameController) {

@@ -167,27 +167,94 @@ TEST_F(DriverCoreTest, BeforeAnyControllerTheReasonIsNoControllerYet) {
   EXPECT_EQ(core_.State(0).reason, "holding: no controller yet");
 }
 
-TEST_F(DriverCoreTest, AtFailoverTheStandbysLatestCommandIsAppliedAtOnce) {
-  // The standby commands other φ than the primary; the state that names it obeyed already
-  // carries its latest command (it does not wait a sample period for the next one).
+/// `primary` (priority 10) and `standby` (0) answer samples 1 … `samples` at 2 kHz, the primary
+/// first (10 µs ahead); the time of the last sample.
+int64_t PrimaryAndStandbyAnswer(DriverCore& core, int samples) {
   int64_t t = 0;
-  for (int k = 1; k <= 50; ++k) {
-    t = (k - 1) * 500 * kUs;  // 2 kHz
-    Send(core_, Command("primary", 10, {0.1, 0.1, 0.1}, k), t, 0);
-    Send(core_, Command("standby", 0, {0.1, 0.1, 0.1}, k), t + 10 * kUs, 0);
+  for (int k = 1; k <= samples; ++k) {
+    t = (k - 1) * 500 * kUs;
+    Send(core, Command("primary", 10, {0.1, 0.1, 0.1}, k), t, 0);
+    Send(core, Command("standby", 0, {0.1, 0.1, 0.1}, k), t + 10 * kUs, 0);
   }
+  return t;
+}
+
+/// `state` applied the standby's answer to `sample` (φ_0 = `phi0`) in the place of the obeyed
+/// primary's: the `count`-th stand-in.
+void ExpectStandIn(const std::optional<DriverState>& state, uint64_t sample, double phi0, uint64_t count) {
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->obeyed_controller_id, "primary");
+  EXPECT_EQ(state->applied_controller_id, "standby");
+  EXPECT_EQ(state->stand_ins, count);
+  EXPECT_EQ(state->answers_sample, sample);
+  EXPECT_NEAR(Phi(*state)[0], phi0, 1e-12);
+}
+
+TEST_F(DriverCoreTest, AKilledPrimarysSamplesAreStoodInForAtOnceAndTheStandbyTakesOverAfterTheGrace) {
+  // The standby commands other φ than the primary. When the primary stops answering, the
+  // standby's answer stands in for each sample the primary owes one wait after it arrived (the
+  // primary answered first until then: 0.2 ms, the least wait), long before the grace.
+  int64_t t = PrimaryAndStandbyAnswer(core_, 50);
   const int64_t standby_at = t + 500 * kUs;
   Send(core_, Command("standby", 0, {0.1001, 0.1, 0.1}, 51), standby_at, 0);
   ASSERT_EQ(core_.obeyed(), "primary");
+  EXPECT_EQ(core_.NextTickNs(), standby_at + ControllerArbiter::kMinStandInWaitNs);
   std::optional<DriverState> state;
   int64_t tick = standby_at;
   for (; tick < standby_at + 2 * kMs && !state; tick += 25 * kUs) state = core_.Tick(tick, 0);
+  ExpectStandIn(state, 51, 0.1001, 1);
+  EXPECT_LE(tick - standby_at, 225 * kUs) << "one wait after the standby's lone answer";
+  // The next sample likewise; then the grace (1.2 ms after the first lone answer) ends and the
+  // standby is obeyed, its latest answer already applied.
+  Send(core_, Command("standby", 0, {0.1002, 0.1, 0.1}, 52), standby_at + 500 * kUs, 0);
+  for (tick = standby_at + 500 * kUs, state.reset(); tick < standby_at + 2 * kMs && !state; tick += 25 * kUs) {
+    state = core_.Tick(tick, 0);
+  }
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->applied_controller_id, "standby");
+  EXPECT_EQ(state->answers_sample, 52u);
+  EXPECT_EQ(state->stand_ins, 2u);
+  for (state.reset(); tick < standby_at + 3 * kMs && !state; tick += 25 * kUs) state = core_.Tick(tick, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_EQ(state->obeyed_controller_id, "standby");
   EXPECT_EQ(state->mode, DriverMode::kActive);
-  EXPECT_EQ(state->answers_sample, 51u);
-  EXPECT_NEAR(Phi(*state)[0], 0.1001, 1e-12);
+  EXPECT_EQ(state->answers_sample, 52u);
+  EXPECT_NEAR(Phi(*state)[0], 0.1002, 1e-12);
   EXPECT_LE(tick - standby_at, 1250 * kUs) << "the grace, 1.2 ms, after the standby's first lone answer";
+}
+
+TEST_F(DriverCoreTest, AStandInIsAppliedWithTheStandbysNextAnswerIfTheTickerWokeLate) {
+  int64_t t = PrimaryAndStandbyAnswer(core_, 50);
+  // The primary is gone; the ticker does not run (a busy machine): the standby's answer to 52,
+  // arriving after the wait for 51 is over, is applied as it arrives.
+  EXPECT_FALSE(Send(core_, Command("standby", 0, {0.1001, 0.1, 0.1}, 51), t + 500 * kUs, 0).has_value());
+  const auto state = Send(core_, Command("standby", 0, {0.1002, 0.1, 0.1}, 52), t + 1000 * kUs, 0);
+  ExpectStandIn(state, 52, 0.1002, 1);
+}
+
+TEST_F(DriverCoreTest, APrimaryLateOnceLosesThatSampleToTheStandbyNotControl) {
+  int64_t t = PrimaryAndStandbyAnswer(core_, 50);
+  // Sample 51: the standby answers, the primary is 0.4 ms late.
+  t += 500 * kUs;
+  Send(core_, Command("standby", 0, {0.1001, 0.1, 0.1}, 51), t, 0);
+  std::optional<DriverState> state;
+  for (int64_t tick = t; tick < t + 400 * kUs && !state; tick += 25 * kUs) state = core_.Tick(tick, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->applied_controller_id, "standby");
+  EXPECT_EQ(state->answers_sample, 51u);
+  // The primary's late answer to 51 is its own: applied over the stand-in's.
+  state = Send(core_, Command("primary", 10, {0.1002, 0.1, 0.1}, 51), t + 400 * kUs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->applied_controller_id, "primary");
+  EXPECT_NEAR(Phi(*state)[0], 0.1002, 1e-12);
+  // On time again: obeyed as ever, no switch, one stand-in.
+  state = Send(core_, Command("primary", 10, {0.1003, 0.1, 0.1}, 52), t + 500 * kUs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->obeyed_controller_id, "primary");
+  EXPECT_EQ(state->controller_switches, 1u);
+  EXPECT_EQ(state->stand_ins, 1u);
+  EXPECT_FALSE(Send(core_, Command("standby", 0, {0.1003, 0.1, 0.1}, 52), t + 510 * kUs, 0).has_value());
+  for (int64_t tick = t + 510 * kUs; tick < t + 2 * kMs; tick += 25 * kUs) EXPECT_FALSE(core_.Tick(tick, 0));
 }
 
 TEST_F(DriverCoreTest, ANewControllerBeyondTheLimitIsRefusedWhileEveryKnownOneIsAlive) {

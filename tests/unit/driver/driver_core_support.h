@@ -60,7 +60,13 @@ inline std::optional<DriverState> Send(DriverCore& core, const ControllerCommand
 
 class DriverCoreTest : public ::testing::Test {
  protected:
-  DriverCoreTest() : backend_(ControlVector::Zero(3)), core_(StagesFromAxes("131"), DriverSettings{}, &backend_) {}
+  DriverCoreTest() : backend_(ControlVector::Zero(3)), core_(StagesFromAxes("131"), ShortGrace(), &backend_) {}
+  /// The arbitration's mechanics at a 1.2-ms grace (the default is longer: stand-ins fill it).
+  static DriverSettings ShortGrace() {
+    DriverSettings settings;
+    settings.min_silence_s = 1.2e-3;
+    return settings;
+  }
   SimulatedWaveplates backend_;
   DriverCore core_;
 };

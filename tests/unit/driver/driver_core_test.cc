@@ -171,20 +171,24 @@ TEST_F(DriverCoreTest, ACommandIsJudgedByTheBenchsRecordOfItsSample) {
   EXPECT_FALSE(core_.OnCommand(Command("A", 0, {0.1, 0.1, 0.1}, 0), 1 * kMs, 0));
   EXPECT_EQ(core_.commands_rejected(), 2u);
   EXPECT_TRUE(core_.holding());
+  // A recorded sample's times in the state are the bench's, not the command's.
+  ControllerCommand recorded = Command("A", 0, {0.1, 0.1, 0.1}, 2, 100 * kUs);
+  recorded.sample_publish_time_ns = -5;
+  auto state = core_.OnCommand(recorded, 1 * kMs, 0);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_EQ(state->sample_publish_time_ns, 22);
   // A sample still on its way (one past the newest) is fine; its motion starts at the time the
   // bench's period puts it at (200 µs), whatever the command says.
   ControllerCommand ahead = Command("A", 0, {0.1, 0.1, 0.1}, 3, 99 * kMs);
   ahead.rate_per_s = Controls({1.0, 0.0, 0.0});
-  auto state = core_.OnCommand(ahead, 1 * kMs, 0);
+  state = core_.OnCommand(ahead, 2 * kMs, 0);
   ASSERT_TRUE(state.has_value());
   EXPECT_EQ(state->motion.start_ns, 200 * kUs);
   EXPECT_EQ(state->sample_time_ns, 200 * kUs);
-  // A recorded sample's times in the state are the bench's, not the command's.
-  ControllerCommand recorded = Command("A", 0, {0.1, 0.1, 0.1}, 2, 100 * kUs);
-  recorded.sample_publish_time_ns = -5;
-  state = core_.OnCommand(recorded, 2 * kMs, 0);
-  ASSERT_TRUE(state.has_value());
-  EXPECT_EQ(state->sample_publish_time_ns, 22);
+  // An answer to a sample older than one already answered would move the waveplates back in
+  // bench time: not applied.
+  EXPECT_FALSE(core_.OnCommand(Command("A", 0, {0.2, 0.1, 0.1}, 2), 3 * kMs, 0));
+  EXPECT_EQ(core_.State(0).answers_sample, 3u);
 }
 
 TEST(DriverCoreLimits, EveryCommandMeetsTheDevicesOwnFiniteLimits) {

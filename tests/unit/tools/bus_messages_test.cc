@@ -192,6 +192,11 @@ TEST(WaveplateStateMessage, JsonHasEveryFieldAndTextSaysHoldingAndWhy) {
   EXPECT_TRUE(Contains(text, "saturated=[1,2]")) << text;
   EXPECT_TRUE(Contains(text, "rejected=4")) << text;
   EXPECT_FALSE(Contains(text, "ramp=")) << text;
+  EXPECT_FALSE(Contains(text, "stand_ins")) << text;
+  m.stand_ins(2);
+  m.applied_controller_id("standby");
+  EXPECT_EQ(ToJson(m)["applied_controller_id"], "standby");
+  EXPECT_TRUE(Contains(ToText(m), "stand_ins=2 (last from standby)")) << ToText(m);
 }
 
 TEST(WaveplateStateMessage, TextOfAnActiveRampNamesTheControllerAndTheRamp) {
