@@ -355,8 +355,11 @@ TEST_F(BenchInstrumentsTest, CalibrationRecoversTheNonlinearMapsAndTheBenchTrack
 }
 
 TEST_F(BenchInstrumentsTest, CalibrationAtSeveralTemperaturesInterpolatesTheMapsAtTheOperatingTemperature) {
-  // The emulator's retardances drift by k = 2e-3 per kelvin (θ·(1 + k·(T − 25 °C))).
-  const json ports = StartEmulator();
+  // The emulator's retardances drift by k = 2e-3 per kelvin (θ·(1 + k·(T − 25 °C))). Its
+  // scrambler at 200 rad/s: three calibrations read the input ~370 times, and at the default
+  // 20 rad/s one reading's pairs once spread 0.0064 over 4 dwells of 0.12 s (a rotation needs
+  // 0.02): the input hardly moved for half a second.
+  const json ports = StartEmulator({"--rate-rad-per-s", "200"});
   const ScenarioConfig truth = LoadScenarioFile(std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/emulator_epc.pbtxt");
   ScenarioConfig nominal = LoadScenarioFile(BenchScenario(Tcp(ports["epc_tcp"]), Tcp(ports["polarimeter_tcp"])));
   for (StageConfig& stage : nominal.stages) {

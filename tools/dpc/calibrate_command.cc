@@ -35,8 +35,10 @@ constexpr double kDegPerRad = 180.0 / M_PI;
 /// The inputs of a voltage's readings must span more than a line: the middle singular value of
 /// their cross-covariance at least this share of the largest.
 constexpr double kMinSpread = 0.02;
-/// A voltage's readings are taken over at most this many dwells before the input is deemed still.
-constexpr int kMaxDwells = 4;
+/// A voltage's readings are taken over at most this many dwells before the input is deemed still
+/// (a slow scrambler's input can stay nearly still for half a second: seen with the emulator's
+/// 20 rad/s).
+constexpr int kMaxDwells = 16;
 
 struct Failure : std::runtime_error {
   using std::runtime_error::runtime_error;
