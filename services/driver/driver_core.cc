@@ -126,35 +126,40 @@ std::optional<DriverState> DriverCore::OnCommand(const ControllerCommand& comman
       break;
   }
   standby_commands_.erase(id);
-  if (stand_in_ && stand_in_->command.answers_sample <= command.answers_sample) stand_in_.reset();
+  if (stand_in_ && stand_in_->answer.command.answers_sample <= command.answers_sample) stand_in_.reset();
   // A stand-in answered a newer sample: this late answer would move the waveplates back.
   if (command.answers_sample < newest_answered_) return std::nullopt;
   return Apply(command, now_ns, wall_ns);
 }
 
+bool DriverCore::ObeyedOwes(uint64_t sample) const {
+  return !arbiter_.holding() && sample > newest_answered_ && arbiter_.LastAnswered(arbiter_.obeyed()) < sample;
+}
+
+DriverState DriverCore::ApplyStandIn(const Received& answer, int64_t now_ns) {
+  ++stand_ins_;
+  return Apply(answer.command, now_ns, answer.wall_ns);
+}
+
 std::optional<DriverState> DriverCore::ConsiderStandIn(const ControllerCommand& command, int64_t now_ns,
                                                        int64_t wall_ns) {
   const uint64_t sample = command.answers_sample;
-  if (arbiter_.holding() || sample <= newest_answered_ || arbiter_.LastAnswered(arbiter_.obeyed()) >= sample) {
-    return std::nullopt;
-  }
+  if (!ObeyedOwes(sample)) return std::nullopt;
   if (!stand_in_) {
-    stand_in_ = StandIn{command, wall_ns, now_ns + arbiter_.StandInWaitNs()};
+    stand_in_ = StandIn{Received{command, wall_ns}, now_ns + arbiter_.StandInWaitNs()};
     return std::nullopt;
   }
   // The newest answer stands in when the wait for the oldest one the obeyed controller owes is
   // over (the wait does not start again with every sample).
-  const ControllerCommand& kept = stand_in_->command;
+  const ControllerCommand& kept = stand_in_->answer.command;
   if (kept.answers_sample > sample || (kept.answers_sample == sample && kept.priority >= command.priority)) {
     return std::nullopt;
   }
   if (now_ns >= stand_in_->due_ns) {
     stand_in_.reset();
-    ++stand_ins_;
-    return Apply(command, now_ns, wall_ns);
+    return ApplyStandIn(Received{command, wall_ns}, now_ns);
   }
-  stand_in_->command = command;
-  stand_in_->received_wall_ns = wall_ns;
+  stand_in_->answer = Received{command, wall_ns};
   return std::nullopt;
 }
 
@@ -167,7 +172,6 @@ void DriverCore::KeepStandbyCommand(const ControllerCommand& command, int64_t wa
 }
 
 DriverState DriverCore::Apply(const ControllerCommand& command, int64_t now_ns, int64_t received_wall_ns) {
-  const int64_t wall_ns = received_wall_ns;
   const std::string& id = command.controller_id;
   // Apply: clamp to the ranges, then limit the slew over the driver's own time since the last
   // applied command (never the command's timestamps), from where the current motion has the
@@ -215,7 +219,7 @@ DriverState DriverCore::Apply(const ControllerCommand& command, int64_t now_ns, 
     Reject(id, fmt::format("backend {} failed: {}", backend_->name(), failure));
     arbiter_.Hold(fmt::format("holding: backend {} failed: {}", backend_->name(), failure));
     StopMotion();
-    return Publishable(wall_ns);
+    return Publishable(received_wall_ns);
   }
   applied_ = backend_->Applied();
   applied_by_ = id;
@@ -223,8 +227,8 @@ DriverState DriverCore::Apply(const ControllerCommand& command, int64_t now_ns, 
   last_applied_ns_ = now_ns;
   ++applied_count_;
   if (limited) ++limited_;
-  Answer(command.answers_sample, wall_ns);
-  return Publishable(wall_ns);
+  Answer(command.answers_sample, received_wall_ns);
+  return Publishable(received_wall_ns);
 }
 
 std::optional<DriverState> DriverCore::Tick(int64_t now_ns, int64_t wall_ns) {
@@ -238,15 +242,12 @@ std::optional<DriverState> DriverCore::Tick(int64_t now_ns, int64_t wall_ns) {
       return Publishable(wall_ns);
     }
   }
-  if (!arbiter_.holding() && stand_in_ && now_ns >= stand_in_->due_ns) {
+  if (stand_in_ && now_ns >= stand_in_->due_ns) {
     // The obeyed controller still owes the sample: the standby's answer stands in.
-    const StandIn stand_in = *stand_in_;
-    const ControllerCommand& command = stand_in.command;
+    const Received answer = stand_in_->answer;
     stand_in_.reset();
-    if (arbiter_.LastAnswered(arbiter_.obeyed()) < command.answers_sample &&
-        command.answers_sample > newest_answered_ && timeline_.Find(command.answers_sample)) {
-      ++stand_ins_;
-      return Apply(command, now_ns, stand_in.received_wall_ns);
+    if (ObeyedOwes(answer.command.answers_sample) && timeline_.Find(answer.command.answers_sample)) {
+      return ApplyStandIn(answer, now_ns);
     }
   }
   if (!arbiter_.holding()) {

@@ -118,6 +118,11 @@ class DriverCore {
   const std::string& last_rejection() const { return last_rejection_; }
 
  private:
+  /// A controller's command and when it arrived (wall clock).
+  struct Received {
+    ControllerCommand command;
+    int64_t wall_ns = 0;  ///< when it arrived
+  };
   void Reject(const std::string& controller_id, const std::string& reason);
   /// The next state answers `sample` (its times from the record; the command's arrival at
   /// `wall_ns`).
@@ -136,6 +141,11 @@ class DriverCore {
   /// older sample the obeyed controller still owes is already over (the ticker may not have run:
   /// a busy machine wakes it late). The state to publish, if it was applied.
   std::optional<DriverState> ConsiderStandIn(const ControllerCommand& command, int64_t now_ns, int64_t wall_ns);
+  /// While a controller is obeyed: `sample` is newer than every answered one and the obeyed
+  /// controller has not answered it (another controller's answer may stand in).
+  bool ObeyedOwes(uint64_t sample) const;
+  /// Applies a standby's answer in the obeyed controller's place, counted.
+  DriverState ApplyStandIn(const Received& answer, int64_t now_ns);
 
   WaveplateChain chain_;
   DriverSettings settings_;
@@ -144,14 +154,9 @@ class DriverCore {
   SampleTimeline timeline_;            ///< the bench's samples, as the polarimeter published them
   double max_slew_per_s_ = 0.0;        ///< the device's limit, or the setting if lower
   ControllerArbiter arbiter_;
-  struct Received {
-    ControllerCommand command;
-    int64_t wall_ns = 0;  ///< when it arrived
-  };
   std::map<std::string, Received> standby_commands_;  ///< each standby's latest
   struct StandIn {
-    ControllerCommand command;
-    int64_t received_wall_ns = 0;
+    Received answer;
     int64_t due_ns = 0;  ///< applied then if the obeyed controller has not answered its sample
   };
   std::optional<StandIn> stand_in_;

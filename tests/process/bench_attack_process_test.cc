@@ -24,6 +24,8 @@ namespace dpc {
 namespace {
 
 using dpc::testing::Eventually;
+using dpc::testing::FindHandover;
+using dpc::testing::Handover;
 using dpc::testing::Process;
 using namespace std::chrono_literals;
 
@@ -356,24 +358,11 @@ TEST_F(BenchAttackTest, TwentyForeignInstancesDelayNeitherANewControllerNorAFail
   b.Signal(SIGKILL);
   const size_t a_before = AppliedBy("A");
   ASSERT_TRUE(Eventually([&] { return AppliedBy("A") > a_before + 100; }, 10s)) << Logs();
-  const auto states = States();
-  int64_t last_b_ns = 0, first_a_ns = 0;
-  // From the last state applying B's command to the first applying A's (standing in, or
-  // obeyed), as published.
-  for (const auto& s : states) {
-    if (s.state.answers_sample() > 0 && s.state.applied_controller_id().to_string() == "B") {
-      last_b_ns = std::max(last_b_ns, s.state.publish_time_ns());
-    }
-  }
-  for (const auto& s : states) {
-    if (s.state.answers_sample() > 0 && s.state.applied_controller_id().to_string() == "A" &&
-        s.state.publish_time_ns() > last_b_ns) {
-      first_a_ns = s.state.publish_time_ns();
-      break;
-    }
-  }
+  const std::optional<Handover> handover = FindHandover(States(), "B", "A");
   flooding = false;
   flood.join();
+  ASSERT_TRUE(handover.has_value());
+  const int64_t last_b_ns = handover->last_from_ns, first_a_ns = handover->first_to_ns;
   ASSERT_GT(first_a_ns, last_b_ns);
   const double gap_ms = static_cast<double>(first_a_ns - last_b_ns) * 1e-6;
   std::printf("failover gap under the flood: %.2f ms\n", gap_ms);

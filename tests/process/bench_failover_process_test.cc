@@ -24,6 +24,8 @@ namespace dpc {
 namespace {
 
 using dpc::testing::Eventually;
+using dpc::testing::FindHandover;
+using dpc::testing::Handover;
 using dpc::testing::LastJsonLine;
 using dpc::testing::Process;
 using dpc::testing::SeenState;
@@ -91,31 +93,12 @@ TEST_F(BenchFailoverTest, KillNineOfTheObeyedControllerHandsControlToTheStandby)
     const size_t standby_before = AppliedBy("standby");  // a loaded machine may have switched briefly
     if (!Eventually([&] { return AppliedBy("standby") > standby_before + 500; }, 10s)) return std::nullopt;
     const auto states = States();
-    // (A loaded machine may have switched briefly before: look after the primary's last state.)
+    const std::optional<Handover> h = FindHandover(states, primary_id, "standby");
+    if (!h) return std::nullopt;
     Failover f;
-    int64_t last_primary_ns = 0, first_standby_ns = 0;
-    size_t last_primary = 0, first_standby = 0;
-    // The gap: from the last state applying the primary's command to the first applying the
-    // standby's (standing in, or obeyed), as published (when applied).
-    for (size_t i = 0; i < states.size(); ++i) {
-      const auto& s = states[i].state;
-      if (s.answers_sample() > 0 && s.applied_controller_id().to_string() == primary_id) {
-        last_primary_ns = s.publish_time_ns();
-        last_primary = i;
-      }
-    }
-    for (size_t i = last_primary + 1; i < states.size(); ++i) {
-      const auto& s = states[i].state;
-      // (The driver's own switch notice repeats the primary's last command: skip it.)
-      if (s.answers_sample() > 0 && s.applied_controller_id().to_string() == "standby" &&
-          s.publish_time_ns() > last_primary_ns) {
-        first_standby_ns = s.publish_time_ns();
-        first_standby = i;
-        f.switch_step = MaxAbsDifference(states[last_primary].state.phi_applied(), s.phi_applied());
-        break;
-      }
-    }
-    if (first_standby_ns <= last_primary_ns) return std::nullopt;
+    const size_t last_primary = h->last_from, first_standby = h->first_to;
+    const int64_t last_primary_ns = h->last_from_ns, first_standby_ns = h->first_to_ns;
+    f.switch_step = MaxAbsDifference(states[last_primary].state.phi_applied(), states[first_standby].state.phi_applied());
     f.gap_ms = static_cast<double>(first_standby_ns - last_primary_ns) * 1e-6;
     f.before_deg = MaxErrorDeg(last_primary_ns - 200'000'000, last_primary_ns);
     f.after_deg = MaxErrorDeg(first_standby_ns, first_standby_ns + 100'000'000);

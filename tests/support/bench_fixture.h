@@ -35,6 +35,38 @@ struct SeenState {
   int64_t seen_ns;
 };
 
+/// A failover as the states show it: the last state applying `from`'s command and the first
+/// after it applying `to`'s (standing in, or obeyed), by index and publish time (when applied).
+struct Handover {
+  size_t last_from = 0, first_to = 0;
+  int64_t last_from_ns = 0, first_to_ns = 0;
+};
+
+/// The handover from `from` to `to` in `states`, or nullopt if `to` applied nothing after
+/// `from`'s last state. (A loaded machine may have handed over briefly before: only what
+/// follows `from`'s last state counts; the driver's own switch notice repeats `from`'s last
+/// command and is skipped.)
+inline std::optional<Handover> FindHandover(const std::vector<SeenState>& states, const std::string& from,
+                                            const std::string& to) {
+  Handover h;
+  for (size_t i = 0; i < states.size(); ++i) {
+    const auto& s = states[i].state;
+    if (s.answers_sample() > 0 && s.applied_controller_id().to_string() == from) {
+      h.last_from = i;
+      h.last_from_ns = s.publish_time_ns();
+    }
+  }
+  for (size_t i = h.last_from + 1; i < states.size(); ++i) {
+    const auto& s = states[i].state;
+    if (s.answers_sample() > 0 && s.applied_controller_id().to_string() == to && s.publish_time_ns() > h.last_from_ns) {
+      h.first_to = i;
+      h.first_to_ns = s.publish_time_ns();
+      return h;
+    }
+  }
+  return std::nullopt;
+}
+
 class BenchFixture : public ::testing::Test {
  protected:
   /// The test's own participant on `domain` (with `security`: DDS Security credentials, e.g.
