@@ -606,7 +606,7 @@ cli::ExitCode RunCalibrateCommand(const CalibrateOptions& o) {
   fmt::print("model against {} measured rotations: {:.3f}° rms, {:.3f}° max{} → {}\n", rotations,
              report["model_residual_rms_deg"].get<double>(), report["model_residual_max_deg"].get<double>(),
              conditions.empty() ? "" : fmt::format(" (tables by {}, operating at {})",
-                                                   by_wavelength ? "wavelength" : "temperature",
+                                                   ConditionNoun(key),
                                                    ConditionText(key, operating_point)),
              o.output_path);
   return cli::ExitCode::kOk;

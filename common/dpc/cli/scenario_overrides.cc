@@ -191,9 +191,7 @@ void ScenarioOverrides::Apply(ScenarioConfig* s) const {
     if (keyed == 0) {
       throw ScenarioError(flag, fmt::format("no map of the scenario is keyed by {} (tables_by_condition with "
                                             "operating_{})",
-                                            condition == ControlMapConfig::Condition::kTemperatureC ? "temperature"
-                                                                                                   : "wavelength",
-                                            ConditionKeyName(condition)));
+                                            ConditionNoun(condition), ConditionKeyName(condition)));
     }
   }
   if (static_cast<int>(!target_point.empty()) + static_cast<int>(!target_set.empty()) +

@@ -139,7 +139,7 @@ void ValidateConditionTables(const ControlMapConfig& map, const std::string& pat
     Fail(operating_path, fmt::format("{} {} is outside the calibrated {}–{} {}: a calibration is not extrapolated "
                                      "(calibrate at this {} too)",
                                      map.operating_point, unit, tables.front().condition, tables.back().condition,
-                                     unit, wavelength ? "wavelength" : "temperature"));
+                                     unit, ConditionNoun(map.condition)));
   }
   try {
     ResolveConditionTables(map);

@@ -56,6 +56,10 @@ const char* ConditionUnit(ControlMapConfig::Condition condition) {
   return condition == ControlMapConfig::Condition::kWavelengthNm ? "nm" : "°C";
 }
 
+const char* ConditionNoun(ControlMapConfig::Condition condition) {
+  return condition == ControlMapConfig::Condition::kWavelengthNm ? "wavelength" : "temperature";
+}
+
 ControlMapConfig ResolveConditionTables(const ControlMapConfig& config) {
   if (config.kind != ControlMapConfig::Kind::kTablesByCondition) return config;
   const std::vector<ConditionTableConfig>& tables = config.condition_tables;

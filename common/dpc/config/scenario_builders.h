@@ -29,9 +29,11 @@ ControlMap BuildControlMap(const ControlMapConfig& config);
 /// not finite, a table is invalid, or the result has more than ControlMap::kMaxTablePoints.
 ControlMapConfig ResolveConditionTables(const ControlMapConfig& config);
 
-/// "temperature_c" or "wavelength_nm"; with the unit for messages: "°C" or "nm".
+/// "temperature_c" or "wavelength_nm"; for messages, the unit ("°C" or "nm") and the noun
+/// ("temperature" or "wavelength").
 const char* ConditionKeyName(ControlMapConfig::Condition condition);
 const char* ConditionUnit(ControlMapConfig::Condition condition);
+const char* ConditionNoun(ControlMapConfig::Condition condition);
 
 /// One WaveplateStage per config, in order: fixed-axis stages become WaveplateStage::FixedAxis
 /// (axis normalized, map, range), adjustable-axis stages WaveplateStage::AdjustableAxis with

@@ -9,6 +9,8 @@
 #include <optional>
 #include <utility>
 
+#include "dpc/config/scenario_builders.h"
+
 namespace dpc {
 namespace {
 
@@ -72,7 +74,6 @@ Vector3 AxisFromEnum(scenario::Axis axis, const Vector3& default_axis, const std
 ConditionTableConfig ConditionTableFromProto(const scenario::TableAtCondition& proto,
                                              ControlMapConfig::Condition condition, const std::string& path) {
   const bool by_temperature = condition == ControlMapConfig::Condition::kTemperatureC;
-  const char* wanted = by_temperature ? "temperature_c" : "wavelength_nm";
   const bool has = by_temperature ? proto.condition_case() == scenario::TableAtCondition::kTemperatureC
                                   : proto.condition_case() == scenario::TableAtCondition::kWavelengthNm;
   if (!has) {
@@ -80,7 +81,7 @@ ConditionTableConfig ConditionTableFromProto(const scenario::TableAtCondition& p
                                           proto.condition_case() == scenario::TableAtCondition::CONDITION_NOT_SET
                                               ? "no condition"
                                               : "a condition of the other kind",
-                                          by_temperature ? "temperature" : "wavelength", wanted));
+                                          ConditionNoun(condition), ConditionKeyName(condition)));
   }
   ConditionTableConfig table;
   table.condition = by_temperature ? proto.temperature_c() : proto.wavelength_nm();
