@@ -5,17 +5,21 @@
 // SVD baseline, the goals from the core issue (GP update ≤ 100 ns, simulator ≥ 10 M samples/s)
 // and, side by side, those of "Speed at the machine's limit": the full control update
 // (ControlLoop/gp: pose, kinematics, task, law) ≤ 40 ns for 4 stages (must ≤ 50), ≤ 30 ns for 3,
-// one trajectory (Simulator/gp) ≥ 25 M samples/s for 4 stages (must ≥ 20 M). Both ControlLoop/gp
-// and ControlLoop/gp-general and the simulator with its general loop print there.
+// one trajectory (Simulator/gp) ≥ 25 M samples/s for 4 stages (must ≥ 20 M), batches in SIMD
+// lanes on one core (Simulator/batch-avx2 ≥ 60 M, Simulator/batch-avx512 ≥ 100 M) and a sweep on
+// every core (Sweep/all-cores, wall time, ≥ 180 M). Both ControlLoop/gp and ControlLoop/gp-general
+// and the simulator with its general loop print there.
 
 #include <Eigen/SVD>
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
 
 #include <map>
+#include <memory>
 #include <optional>
 #include <random>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -24,7 +28,9 @@
 #include "dpc/control/control_problem.h"
 #include "dpc/control/gradient_projection_law.h"
 #include "dpc/control/polarization_controller.h"
+#include "dpc/sim/batch_simulator.h"
 #include "dpc/sim/closed_loop_simulator.h"
+#include "dpc/sim/sweep_runner.h"
 
 namespace dpc {
 namespace {
@@ -247,6 +253,57 @@ void BM_Simulator(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(samples), benchmark::Counter::kIsRate);
 }
 
+// Batches of the paper scenario (one seed per lane) on one core; reports samples per second of
+// all lanes together. Arg 1: the instruction set (1 AVX2, 2 AVX-512).
+void BM_SimulatorBatch(benchmark::State& state) {
+  const int stages = static_cast<int>(state.range(0));
+  const BatchIsa isa = state.range(1) == 2 ? BatchIsa::kAvx512 : BatchIsa::kAvx2;
+  if (DetectBatchIsa() < isa) {
+    state.SkipWithError("the processor lacks this instruction set");
+    return;
+  }
+  std::vector<std::unique_ptr<ClosedLoopSimulator>> simulators;
+  std::vector<const ClosedLoopSimulator*> lanes;
+  for (int l = 0; l < BatchLanesOf(isa); ++l) {
+    ScenarioConfig scenario = PaperScenario(Axes(stages));
+    scenario.simulation.duration_s = 0.02;  // 1e6 samples per lane at 50 MHz
+    scenario.controller.activation_s = 0.0;
+    scenario.simulation.seed = static_cast<uint64_t>(l + 1);
+    simulators.push_back(std::make_unique<ClosedLoopSimulator>(scenario));
+    lanes.push_back(simulators.back().get());
+  }
+  int64_t samples = 0;
+  for (auto _ : state) {
+    const std::vector<SimulationResult> results = RunBatch(lanes, isa);
+    for (const SimulationResult& r : results) samples += r.summary.samples;
+    benchmark::DoNotOptimize(results.front().summary.error_deg.mean);
+  }
+  state.counters["samples_per_s"] =
+      benchmark::Counter(static_cast<double>(samples), benchmark::Counter::kIsRate);
+}
+
+// A sweep as `dpc sweep` runs it (RunSweep: batches in the widest lanes, on every core): 4 seeds
+// per core and lane of the paper scenario; samples per second of wall time.
+void BM_Sweep(benchmark::State& state) {
+  const int stages = static_cast<int>(state.range(0));
+  const int threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  std::vector<ScenarioConfig> scenarios;
+  for (int i = 0; i < 4 * threads * BatchLanesOf(ChosenBatchIsa()); ++i) {
+    ScenarioConfig scenario = PaperScenario(Axes(stages));
+    scenario.simulation.duration_s = 0.01;
+    scenario.controller.activation_s = 0.0;
+    scenario.simulation.seed = static_cast<uint64_t>(i + 1);
+    scenarios.push_back(scenario);
+  }
+  int64_t samples = 0;
+  for (auto _ : state) {
+    const std::vector<SweepOutcome> outcomes = RunSweep(scenarios, threads);
+    for (const SweepOutcome& o : outcomes) samples += o.result.summary.samples;
+  }
+  state.counters["samples_per_s"] =
+      benchmark::Counter(static_cast<double>(samples), benchmark::Counter::kIsRate);
+}
+
 void RegisterAll() {
   const std::vector<std::pair<const char*, ControlMethod>> laws{
       {"transpose", ControlMethod::kTranspose},
@@ -298,6 +355,19 @@ void RegisterAll() {
   benchmark::RegisterBenchmark("Simulator/gp-general-loop", BM_Simulator)
       ->Args({3, 2})
       ->Args({4, 2})
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("Simulator/batch-avx2", BM_SimulatorBatch)
+      ->Args({3, 1})
+      ->Args({4, 1})
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("Simulator/batch-avx512", BM_SimulatorBatch)
+      ->Args({3, 2})
+      ->Args({4, 2})
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("Sweep/all-cores", BM_Sweep)
+      ->Arg(3)
+      ->Arg(4)
+      ->UseRealTime()
       ->Unit(benchmark::kMillisecond);
 }
 
@@ -432,6 +502,29 @@ void PrintSummary(const std::map<std::string, CollectingReporter::Entry>& e) {
                stages, sim->samples_per_s / 1e6, general ? general->samples_per_s / 1e6 : NAN,
                stages == 4 ? fmt::format("   >= 25 M (must >= 20 M): {}",
                                          verdict(sim->samples_per_s, 25e6, 20e6, false))
+                           : "");
+  }
+  for (int stages : {4, 3}) {
+    const auto* sim = find(fmt::format("Simulator/gp/{}/0", stages));
+    for (const auto& [isa, arg, goal] : {std::tuple{"avx2", 1, 60e6}, std::tuple{"avx512", 2, 100e6}}) {
+      const auto* batch = find(fmt::format("Simulator/batch-{}/{}/{}", isa, stages, arg));
+      if (!batch || batch->samples_per_s <= 0.0) continue;
+      fmt::print("  batched ({:<6}) one core, {} stages: {:6.2f} M samples/s ({:.2f}x one trajectory)"
+                 "{}\n",
+                 isa, stages, batch->samples_per_s / 1e6,
+                 sim ? batch->samples_per_s / sim->samples_per_s : NAN,
+                 stages == 4 ? fmt::format("   >= {:.0f} M: {}", goal / 1e6,
+                                           verdict(batch->samples_per_s, goal, goal, false))
+                             : "");
+    }
+  }
+  for (int stages : {4, 3}) {
+    const auto* sweep = find(fmt::format("Sweep/all-cores/{}/real_time", stages));
+    if (!sweep) continue;
+    fmt::print("  sweep on every core ({} lanes), {} stages: {:6.2f} M samples/s{}\n",
+               BatchIsaName(ChosenBatchIsa()), stages, sweep->samples_per_s / 1e6,
+               stages == 4 ? fmt::format("   >= 180 M: {}",
+                                         verdict(sweep->samples_per_s, 180e6, 180e6, false))
                            : "");
   }
 }

@@ -199,11 +199,11 @@ class FusedGradientProjection {
     return result;
   }
 
- private:
   /// det G above this fraction of (tr G)² takes the normal equations (as TaskPseudoInverse).
   static constexpr double kWellConditioned = 1e-6;
 
-  /// Δφ by the general one-sided Jacobi pseudo-inverse; returns the rank.
+  /// Δφ by the general one-sided Jacobi pseudo-inverse at the task rows t0, t1 (what Update does
+  /// near a singularity; the batched simulator calls it for one lane); returns the rank.
   [[gnu::noinline]] int SolveNearSingularity(Lanes t0, Lanes t1, double error0, double error1,
                                              Lanes phi, double mu_null, Lanes* delta,
                                              SingularValues* singular_values) {
@@ -221,6 +221,8 @@ class FusedGradientProjection {
     *singular_values = fallback_.singular_values();
     return fallback_.rank();
   }
+
+ private:
 
   Axes axes_;
   // Per lane; an idle lane (3 stages) has k = 0, θ0 = 0.

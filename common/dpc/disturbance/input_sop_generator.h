@@ -68,6 +68,11 @@ class InputSopGenerator {
   double sample_period_s() const { return sample_period_s_; }
   const std::vector<std::unique_ptr<Disturbance>>& disturbances() const { return disturbances_; }
 
+  /// For the batched simulator, which runs the paper scrambler itself in vector lanes: the
+  /// scrambler when it is the only disturbance (else nullptr), and the stream it draws from.
+  const PaperScrambler* only_scrambler() const { return only_scrambler_; }
+  RandomSource& random_source() { return random_; }
+
   /// "initial [1, 0, 0]; paper scrambler: …; random walk: …".
   std::string Describe() const;
 

@@ -69,6 +69,12 @@ class PaperScrambler final : public Disturbance {
   double kick_sigma_rad() const { return kick_sigma_rad_; }
   const Vector3& rotation_axis() const { return rotation_axis_; }
   const Vector3& kick_axis() const { return kick_axis_; }
+  /// What Advance computes with (the batched simulator repeats it in vector lanes): each axis
+  /// as an elemental one (kGeneral if it is not S1, S2 or S3) and the step's cos and sin.
+  ElementalAxis rotation_elemental() const { return rotation_elemental_; }
+  ElementalAxis kick_elemental() const { return kick_elemental_; }
+  double step_cos() const { return step_cos_; }
+  double step_sin() const { return step_sin_; }
 
  private:
   double rate_rad_per_s_;

@@ -138,8 +138,9 @@ constexpr Pattern PatternBefore(int stage) {
 
 // (u, v) ← (c·u − s·v, s·u + c·v) for entries of patterns kU, kV, skipping known zeros and ones
 // (exact: the same bits as the full expressions for finite values).
-template <Entry kU, Entry kV>
-[[gnu::always_inline]] inline void Turn(double& u, double& v, double c, double s) {
+// T is double, or a vector of doubles (one lane per trajectory: sim/batch_kernel_impl.h).
+template <Entry kU, Entry kV, typename T>
+[[gnu::always_inline]] inline void Turn(T& u, T& v, T c, T s) {
   if constexpr (kU == Entry::kZero && kV == Entry::kZero) {
     return;
   } else if constexpr (kU == Entry::kZero) {
@@ -155,14 +156,14 @@ template <Entry kU, Entry kV>
       u = c;
       v = s;
     } else {
-      const double t = u;
+      const T t = u;
       u = c * t;
       v = s * t;
     }
   } else {
     // The columns of B are unit vectors: a 1 has zeros beside it, so both are values here.
     static_assert(kU == Entry::kValue && kV == Entry::kValue);
-    const double t = u;
+    const T t = u;
     u = c * t - s * v;
     v = s * t + c * v;
   }
@@ -171,22 +172,22 @@ template <Entry kU, Entry kV>
 }  // namespace elemental_chain_detail
 
 /// A stage's axis in the input frame, B_(e−1)ᵀ a_e: row kRow of B_(e−1), with the entries known
-/// to be 0 or 1 (pattern kPattern) left out of its products.
-template <elemental_chain_detail::Pattern kPattern, int kRow>
+/// to be 0 or 1 (pattern kPattern) left out of its products. T: double or a vector of doubles.
+template <elemental_chain_detail::Pattern kPattern, int kRow, typename T = double>
 class InputFrameAxis {
  public:
-  explicit InputFrameAxis(const double (&b)[3][3]) : b_(b) {}
+  explicit InputFrameAxis(const T (&b)[3][3]) : b_(b) {}
 
   /// (B_(e−1)ᵀ a_e)·(x, y, z).
-  [[gnu::always_inline]] double Dot(double x, double y, double z) const {
+  [[gnu::always_inline]] T Dot(T x, T y, T z) const {
     using elemental_chain_detail::Entry;
-    const double w[3] = {x, y, z};
-    double sum = 0.0;
+    const T w[3] = {x, y, z};
+    T sum{};
     bool first = true;
     ForEachIndex<3>([&](auto col) {
       constexpr Entry kind = kPattern[kRow][col];
       if constexpr (kind != Entry::kZero) {
-        const double term = kind == Entry::kOne ? w[col] : w[col] * b_[kRow][col];
+        const T term = kind == Entry::kOne ? w[col] : w[col] * b_[kRow][col];
         sum = first ? term : sum + term;
         first = false;
       }
@@ -195,27 +196,31 @@ class InputFrameAxis {
   }
 
  private:
-  const double (&b_)[3][3];
+  const T (&b_)[3][3];
 };
 
 /// Real-time. The forward pass at the sines and cosines of the stage angles: for each stage e in
 /// light order, on_stage(e, axis) with e a std::integral_constant and axis the stage's
 /// InputFrameAxis (before its rotation is applied); then m = M = B_m (m[row][column]).
-template <typename Axes, typename OnStage>
-[[gnu::always_inline]] inline void ElementalForwardPass(const Axes& axes, Lanes cos, Lanes sin,
-                                                        double (&m)[3][3], OnStage&& on_stage) {
+/// T is double with `Angles` the Lanes of the stages, or a vector of doubles (a trajectory per
+/// lane) with `Angles` an array of them, one per stage.
+template <typename Axes, typename Angles, typename T, typename OnStage>
+[[gnu::always_inline]] inline void ElementalForwardPass(const Axes& axes, const Angles& cos,
+                                                        const Angles& sin, T (&m)[3][3],
+                                                        OnStage&& on_stage) {
   using namespace elemental_chain_detail;
   constexpr int N = Axes::kStages;
-  m[0][0] = 1.0, m[0][1] = 0.0, m[0][2] = 0.0;
-  m[1][0] = 0.0, m[1][1] = 1.0, m[1][2] = 0.0;
-  m[2][0] = 0.0, m[2][1] = 0.0, m[2][2] = 1.0;
+  const T zero{}, one = zero + 1.0;
+  m[0][0] = one, m[0][1] = zero, m[0][2] = zero;
+  m[1][0] = zero, m[1][1] = one, m[1][2] = zero;
+  m[2][0] = zero, m[2][1] = zero, m[2][2] = one;
   // One stage with its axis and the pattern of B before it as constants.
   const auto stage = [&](auto e, auto axis, auto pattern) {
     constexpr ElementalAxis kAxis = decltype(axis)::value;
     constexpr Pattern kPattern = decltype(pattern)::value;
     constexpr int a = AxisRow(kAxis), i = FirstMixedRow(kAxis), j = SecondMixedRow(kAxis);
-    on_stage(e, InputFrameAxis<kPattern, a>(m));
-    const double c = cos[e()], s = sin[e()];
+    on_stage(e, InputFrameAxis<kPattern, a, T>(m));
+    const T c = cos[e()], s = sin[e()];
     ForEachIndex<3>([&](auto col) { Turn<kPattern[i][col], kPattern[j][col]>(m[i][col], m[j][col], c, s); });
   };
   ForEachIndex<N>([&](auto e) {

@@ -44,10 +44,11 @@ inline Vector3 RotateVector(const Vector3& axis, double c, double s, const Vecto
 }
 
 /// Rotates (x, y, z) by the angle with cosine `c` and sine `s` about an elemental axis (the
-/// other two components turn in their plane; ~6 flops). Does nothing for kGeneral.
-inline void RotateElemental(ElementalAxis axis, double c, double s, double& x, double& y,
-                            double& z) {
-  double t;
+/// other two components turn in their plane; ~6 flops). Does nothing for kGeneral. T: double, or
+/// a vector of doubles (the batched simulator's lanes, sim/batch_kernel_impl.h).
+template <typename T>
+inline void RotateElemental(ElementalAxis axis, T c, T s, T& x, T& y, T& z) {
+  T t;
   switch (axis) {
     case ElementalAxis::kS1: t = y; y = c * t - s * z; z = s * t + c * z; return;
     case ElementalAxis::kS2: t = z; z = c * t - s * x; x = s * t + c * x; return;

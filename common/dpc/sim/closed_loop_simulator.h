@@ -105,6 +105,10 @@ class ClosedLoopSimulator {
   bool uses_fast_path() const { return fast_path_.has_value(); }
   int64_t total_samples() const { return total_samples_; }
   int64_t activation_sample() const { return activation_sample_; }
+  /// The fused update's plan when Run uses the fast path (the batched simulator runs the same).
+  const std::optional<FusedUpdatePlan>& fast_path_plan() const { return fast_path_; }
+  /// The command before the first update.
+  const ControlVector& initial_phi() const { return initial_phi_; }
 
  private:
   /// The fused update's plan if the scenario is in the fast path's class, else nullopt.

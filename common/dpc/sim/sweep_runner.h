@@ -1,9 +1,14 @@
 #pragma once
 // Runs many independent simulations on all cores (a sweep over rates, seeds, methods, devices).
 //
-// Each scenario is simulated by its own ClosedLoopSimulator on one worker thread; runs share
-// nothing, so the results equal those of running each scenario alone (bit for bit: every run
-// seeds its own random streams). Workers take the next scenario from a shared counter.
+// Runs of the fast path's class that may share a batch (the same stage axes, delay, sample count
+// and activation: seeds, rates, laws, steps, targets may differ) are simulated together in the
+// lanes of a vector (batch_simulator.h: 8 with AVX-512, 4 with AVX2; DPC_BATCH_ISA=none runs
+// each alone); every other scenario by its own ClosedLoopSimulator. Workers (one per thread) take
+// the next batch or run from a shared counter; runs of one kind are split over at least as many
+// batches as there are threads. Runs share nothing, so the results equal those of running each
+// scenario alone, bit for bit (every run seeds its own random streams; the batch's lanes repeat
+// the scalar loop's operations).
 
 #include <atomic>
 #include <cstddef>

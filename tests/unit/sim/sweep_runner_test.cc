@@ -32,6 +32,48 @@ TEST(SweepRunnerTest, ParallelResultsEqualSeparateRuns) {
   }
 }
 
+TEST(SweepRunnerTest, BatchedRunsOfSeveralKindsEqualSeparateRuns) {
+  // 17 runs: 12 that share batches (two durations), a general-path law, another device, an
+  // invalid one; in the processor's widest lanes and with batches off.
+  std::vector<ScenarioConfig> scenarios;
+  for (uint64_t seed = 1; seed <= 12; ++seed) {
+    ScenarioConfig s = Short(seed, 5e3 * static_cast<double>(seed));
+    if (seed % 3 == 0) s.controller.method = ControlMethod::kPseudoInverse;
+    if (seed > 8) s.simulation.duration_s = 0.7e-3;
+    scenarios.push_back(s);
+  }
+  ScenarioConfig rls = Short(13, 1e4);
+  rls.controller.method = ControlMethod::kRegularizedLeastSquares;
+  scenarios.push_back(rls);
+  ScenarioConfig four = Short(14, 1e4);
+  four.stages = PaperScenario("3131").stages;
+  four.controller.initial_phi.clear();
+  scenarios.push_back(four);
+  scenarios.push_back(Short(15, -1.0));
+  scenarios.push_back(Short(16, 2e4));
+  scenarios.push_back(Short(17, 3e4));
+  for (const char* isa : {"", "none"}) {
+    if (*isa != '\0') setenv("DPC_BATCH_ISA", isa, 1);
+    const auto outcomes = RunSweep(scenarios, 2);
+    unsetenv("DPC_BATCH_ISA");
+    ASSERT_EQ(outcomes.size(), scenarios.size());
+    for (size_t i = 0; i < scenarios.size(); ++i) {
+      SCOPED_TRACE(std::string("run ") + std::to_string(i) + " batches " + (*isa ? isa : "on"));
+      if (i == 14) {
+        EXPECT_FALSE(outcomes[i].ok);
+        continue;
+      }
+      ASSERT_TRUE(outcomes[i].ok) << outcomes[i].error;
+      const SimulationResult alone = ClosedLoopSimulator(scenarios[i]).Run();
+      EXPECT_EQ(outcomes[i].result.summary.error_deg.mean, alone.summary.error_deg.mean);
+      EXPECT_EQ(outcomes[i].result.summary.error_deg.p99, alone.summary.error_deg.p99);
+      EXPECT_EQ(outcomes[i].result.summary.excursions, alone.summary.excursions);
+      EXPECT_EQ(outcomes[i].result.summary.samples, alone.summary.samples);
+      EXPECT_EQ(outcomes[i].result.final_phi, alone.final_phi);
+    }
+  }
+}
+
 TEST(SweepRunnerTest, InvalidScenariosFailAloneAndStopSkipsTheRest) {
   std::vector<ScenarioConfig> scenarios{Short(1, 1e4), Short(2, -5.0), Short(3, 1e4)};
   const auto outcomes = RunSweep(scenarios, 1);

@@ -1,0 +1,382 @@
+#include "dpc/sim/batch_simulator.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <memory>
+#include <stdexcept>
+#include <string_view>
+
+#include "dpc/control/fused_gradient_projection.h"
+#include "dpc/disturbance/paper_scrambler.h"
+#include "dpc/sim/batch_kernel.h"
+#include "dpc/sim/simulation_run.h"
+
+namespace dpc {
+
+BatchIsa DetectBatchIsa() {
+#if defined(__x86_64__)
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+      __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("fma")) {
+    return BatchIsa::kAvx512;
+  }
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return BatchIsa::kAvx2;
+#endif
+  return BatchIsa::kNone;
+}
+
+BatchIsa ChosenBatchIsa() {
+  const BatchIsa detected = DetectBatchIsa();
+  const char* chosen = std::getenv("DPC_BATCH_ISA");
+  if (chosen == nullptr) return detected;
+  const std::string_view name(chosen);
+  BatchIsa wanted = detected;
+  if (name == "none") wanted = BatchIsa::kNone;
+  if (name == "avx2") wanted = BatchIsa::kAvx2;
+  if (name == "avx512") wanted = BatchIsa::kAvx512;
+  return std::min(wanted, detected);
+}
+
+int BatchLanesOf(BatchIsa isa) {
+  switch (isa) {
+    case BatchIsa::kAvx512: return 8;
+    case BatchIsa::kAvx2: return 4;
+    case BatchIsa::kNone: return 1;
+  }
+  return 1;
+}
+
+const char* BatchIsaName(BatchIsa isa) {
+  switch (isa) {
+    case BatchIsa::kAvx512: return "avx512";
+    case BatchIsa::kAvx2: return "avx2";
+    case BatchIsa::kNone: return "none";
+  }
+  return "none";
+}
+
+bool CanShareBatch(const ClosedLoopSimulator& a, const ClosedLoopSimulator& b) {
+  const std::optional<FusedUpdatePlan>& pa = a.fast_path_plan();
+  const std::optional<FusedUpdatePlan>& pb = b.fast_path_plan();
+  if (!pa || !pb || pa->stages != pb->stages) return false;
+  for (int e = 0; e < pa->stages; ++e) {
+    if (pa->axis[e] != pb->axis[e]) return false;
+  }
+  return a.delay_samples() == b.delay_samples() && a.total_samples() == b.total_samples() &&
+         a.activation_sample() == b.activation_sample();
+}
+
+namespace {
+
+/// What a lane keeps on the scalar side: its run (input, polarimeters, statistics) and its
+/// scalar update (for the near-singular solve and the exact poses), with the near-singular
+/// outcomes of the current block.
+template <typename Axes>
+struct Lane {
+  Lane(const ClosedLoopSimulator& simulator, const Axes& axes)
+      : simulator(simulator),
+        run(simulator.scenario(), simulator.target(), Axes::kStages, simulator.total_samples(),
+            nullptr, 1),
+        update(*simulator.fast_path_plan(), axes),
+        sample_period_s(1.0 / simulator.scenario().simulation.sample_rate_hz) {}
+
+  const ClosedLoopSimulator& simulator;
+  SimulationRun run;
+  FusedGradientProjection<Axes> update;
+  double sample_period_s;
+  int rank[kBatchBlock] = {};
+  SingularValues singular_values[kBatchBlock];
+};
+
+template <typename Axes>
+struct Batch {
+  std::vector<std::unique_ptr<Lane<Axes>>> lanes;  ///< the real lanes; the rest repeat lane 0
+  bool Real(int lane) const { return lane < static_cast<int>(lanes.size()); }
+};
+
+template <typename Axes>
+int NearSingular(void* context, int lane, int index, const double* t0, const double* t1,
+                 double error0, double error1, const double* phi, double mu_null, double* delta) {
+  auto& batch = *static_cast<Batch<Axes>*>(context);
+  if (!batch.Real(lane)) {  // a padding lane: its outcome is discarded
+    for (int e = 0; e < Axes::kStages; ++e) delta[e] = 0.0;
+    return 2;
+  }
+  Lane<Axes>& l = *batch.lanes[static_cast<size_t>(lane)];
+  const Lanes row0 = {t0[0], t0[1], t0[2], t0[3]}, row1 = {t1[0], t1[1], t1[2], t1[3]};
+  const Lanes phi_lanes = {phi[0], phi[1], phi[2], phi[3]};
+  Lanes delta_lanes;
+  const int rank = l.update.SolveNearSingularity(row0, row1, error0, error1, phi_lanes, mu_null,
+                                                 &delta_lanes, &l.singular_values[index]);
+  l.rank[index] = rank;
+  for (int e = 0; e < Axes::kStages; ++e) delta[e] = delta_lanes[e];
+  return rank;
+}
+
+template <typename Axes>
+void ExactPose(void* context, int lane, const double* phi, double* cos, double* sin) {
+  auto& batch = *static_cast<Batch<Axes>*>(context);
+  const Lane<Axes>& l = *batch.lanes[batch.Real(lane) ? static_cast<size_t>(lane) : 0];
+  ElementalPose<Axes::kStages> pose;
+  for (int e = 0; e < Axes::kStages; ++e) pose.phi[e] = phi[e];
+  l.update.ExactPose(&pose);
+  for (int e = 0; e < Axes::kStages; ++e) cos[e] = pose.cos[e], sin[e] = pose.sin[e];
+}
+
+template <typename Axes>
+void MeasureOutput(void* context, int lane, const double* s_out, double* measured) {
+  auto& batch = *static_cast<Batch<Axes>*>(context);
+  if (!batch.Real(lane)) {
+    for (int c = 0; c < 3; ++c) measured[c] = s_out[c];
+    return;
+  }
+  const StokesVector m = batch.lanes[static_cast<size_t>(lane)]->run.output_polarimeter.Measure(
+      StokesVector(s_out[0], s_out[1], s_out[2]));
+  for (int c = 0; c < 3; ++c) measured[c] = m[c];
+}
+
+template <typename Axes>
+void MeasureInput(void* context, int lane, const double* s_in, double* measured) {
+  auto& batch = *static_cast<Batch<Axes>*>(context);
+  const StokesVector m = batch.lanes[static_cast<size_t>(lane)]->run.input_polarimeter.Measure(
+      StokesVector(s_in[0], s_in[1], s_in[2]));
+  for (int c = 0; c < 3; ++c) measured[c] = m[c];
+}
+
+void LibrarySinCos(double x, double* s, double* c) { SinCos(x, s, c); }
+
+/// Whether every lane's input is the paper scrambler alone with elemental axes, the same in
+/// every lane: the kernel then runs it (BatchLanes::vector_input).
+template <typename Axes>
+bool VectorInput(const Batch<Axes>& batch) {
+  const PaperScrambler* first = batch.lanes[0]->run.input.only_scrambler();
+  if (first == nullptr || first->rotation_elemental() == ElementalAxis::kGeneral ||
+      first->kick_elemental() == ElementalAxis::kGeneral) {
+    return false;
+  }
+  for (const auto& lane : batch.lanes) {
+    const PaperScrambler* scrambler = lane->run.input.only_scrambler();
+    if (scrambler == nullptr || scrambler->rotation_elemental() != first->rotation_elemental() ||
+        scrambler->kick_elemental() != first->kick_elemental()) {
+      return false;
+    }
+  }
+  return true;
+}
+
+/// A block's buffers, [quantity][index·8 + lane].
+struct BlockBuffers {
+  static constexpr size_t kSize = static_cast<size_t>(kBatchBlock) * kMaxBatchLanes;
+  alignas(64) double s_in[3][kSize];
+  alignas(64) double measured_in[3][kSize];
+  alignas(64) double s_out[3][kSize];
+  alignas(64) double phi_applied[4][kSize];
+  alignas(64) double gram[4][kSize];
+  alignas(64) double normals[kSize];
+  alignas(64) uint8_t flags[kSize];
+};
+
+template <typename Axes>
+std::vector<SimulationResult> RunBatchFor(std::span<const ClosedLoopSimulator* const> simulators,
+                                          BatchIsa isa, const Axes& axes) {
+  constexpr int N = Axes::kStages;
+  const int width = BatchLanesOf(isa);
+  const ClosedLoopSimulator& first = *simulators[0];
+  const int64_t total = first.total_samples(), activation = first.activation_sample();
+  const int64_t delay = first.delay_samples();
+
+  Batch<Axes> batch;
+  for (const ClosedLoopSimulator* simulator : simulators) {
+    batch.lanes.push_back(std::make_unique<Lane<Axes>>(*simulator, axes));
+  }
+  BatchLanes lanes;
+  lanes.width = width;
+  lanes.stages = N;
+  const FusedUpdatePlan& first_plan = *first.fast_path_plan();
+  for (int e = 0; e < N; ++e) lanes.axis[e] = first_plan.axis[e];
+  lanes.delay_samples = delay;
+  lanes.activation_sample = activation;
+  lanes.fused_multiply_add = MulAdd(1.0 + 0x1p-52, 1.0 - 0x1p-52, -1.0) != 0.0;
+  lanes.well_conditioned = FusedGradientProjection<Axes>::kWellConditioned;
+  lanes.max_incremental_steps = WaveplateChain::kMaxIncrementalSteps;
+  lanes.context = &batch;
+  lanes.near_singular = &NearSingular<Axes>;
+  lanes.exact_pose = &ExactPose<Axes>;
+  lanes.measure_output = &MeasureOutput<Axes>;
+  lanes.measure_input = &MeasureInput<Axes>;
+  lanes.sin_cos = &LibrarySinCos;
+  lanes.vector_input = VectorInput(batch);
+  if (lanes.vector_input) {
+    const PaperScrambler& scrambler = *batch.lanes[0]->run.input.only_scrambler();
+    lanes.input_rotation_axis = scrambler.rotation_elemental();
+    lanes.input_kick_axis = scrambler.kick_elemental();
+  }
+  std::vector<double> line(static_cast<size_t>(delay) * 3 * 4 * kMaxBatchLanes, 0.0);
+  lanes.line = line.data();
+  for (int l = 0; l < width; ++l) {
+    const Lane<Axes>& lane = *batch.lanes[batch.Real(l) ? static_cast<size_t>(l) : 0];
+    const FusedUpdatePlan& plan = *lane.simulator.fast_path_plan();
+    for (int e = 0; e < N; ++e) lanes.rad_per_unit[e][l] = plan.rad_per_unit[e];
+    lanes.step[l] = plan.step;
+    lanes.nullspace_step[l] = plan.nullspace_step;
+    lanes.has_threshold[l] = plan.threshold.has_value();
+    lanes.threshold[l] = plan.threshold.value_or(0.0);
+    lanes.measured_loop[l] = plan.loop == LoopMode::kMeasured;
+    for (int c = 0; c < 3; ++c) lanes.target[c][l] = plan.target_point[c];
+    lanes.noisy_output[l] = batch.Real(l) && lane.run.output_polarimeter.sigma_rad() > 0.0;
+    lanes.noisy_input[l] = batch.Real(l) && lane.run.input_polarimeter.sigma_rad() > 0.0;
+    if (lanes.vector_input) {
+      const PaperScrambler& scrambler = *lane.run.input.only_scrambler();
+      for (int c = 0; c < 3; ++c) lanes.sop[c][l] = lane.run.input.current_sop()[c];
+      lanes.input_step_cos[l] = scrambler.step_cos();
+      lanes.input_step_sin[l] = scrambler.step_sin();
+      lanes.input_kick_sigma[l] = scrambler.kick_sigma_rad();
+    }
+    ElementalPose<N> pose;
+    for (int e = 0; e < N; ++e) pose.phi[e] = lane.simulator.initial_phi()[e];
+    lane.update.ExactPose(&pose);
+    for (int e = 0; e < 4; ++e) {
+      lanes.phi[e][l] = pose.phi[e];
+      lanes.cos[e][l] = pose.cos[e];
+      lanes.sin[e][l] = pose.sin[e];
+      for (int64_t slot = 0; slot < delay; ++slot) {
+        double* s = line.data() + slot * 3 * 4 * kMaxBatchLanes;
+        s[e * kMaxBatchLanes + l] = pose.phi[e];
+        s[(4 + e) * kMaxBatchLanes + l] = pose.cos[e];
+        s[(8 + e) * kMaxBatchLanes + l] = pose.sin[e];
+      }
+    }
+    lanes.incremental_steps[l] = 0;
+  }
+#if defined(__x86_64__)
+  void (*kernel)(BatchLanes&, const BatchBlock&) =
+      isa == BatchIsa::kAvx512 ? &RunBatchBlockAvx512 : &RunBatchBlockAvx2;
+#else
+  void (*kernel)(BatchLanes&, const BatchBlock&) = nullptr;
+  throw std::invalid_argument("RunBatch: no vector kernel for this processor");
+#endif
+
+  auto buffers = std::make_unique<BlockBuffers>();
+  BatchBlock block;
+  for (int c = 0; c < 3; ++c) {
+    block.s_in[c] = buffers->s_in[c];
+    block.measured_in[c] = buffers->measured_in[c];
+    block.s_out[c] = buffers->s_out[c];
+  }
+  for (int e = 0; e < 4; ++e) {
+    block.phi_applied[e] = buffers->phi_applied[e];
+    block.gram[e] = buffers->gram[e];
+  }
+  block.flags = buffers->flags;
+  block.normals = buffers->normals;
+
+  const int real = static_cast<int>(batch.lanes.size());
+  for (int64_t k = 0; k < total;) {
+    const int count = static_cast<int>(std::min<int64_t>(kBatchBlock, total - k));
+    if (lanes.vector_input) {
+      // The kicks' normal draws, lane by lane from each lane's stream (none at sample 0).
+      for (int l = 0; l < width; ++l) {
+        if (!batch.Real(l)) {
+          for (int i = 0; i < count; ++i) {
+            buffers->normals[static_cast<size_t>(i) * kMaxBatchLanes + static_cast<size_t>(l)] =
+                buffers->normals[static_cast<size_t>(i) * kMaxBatchLanes];
+          }
+          continue;
+        }
+        if (!(lanes.input_kick_sigma[l] > 0.0)) continue;
+        RandomSource& random = batch.lanes[static_cast<size_t>(l)]->run.input.random_source();
+        for (int i = 0; i < count; ++i) {
+          buffers->normals[static_cast<size_t>(i) * kMaxBatchLanes + static_cast<size_t>(l)] =
+              k + i > 0 ? random.Normal() : 0.0;
+        }
+      }
+    }
+    // Otherwise the input and its polarimeter (they do not depend on the control), the lanes
+    // interleaved so that their dependency chains (each input follows from the last) overlap.
+    for (int i = 0; i < (lanes.vector_input ? 0 : count); ++i) {
+      for (int l = 0; l < real; ++l) {
+        SimulationRun& run = batch.lanes[static_cast<size_t>(l)]->run;
+        const StokesVector& s_in = run.input.Next();
+        const size_t at = static_cast<size_t>(i) * kMaxBatchLanes + static_cast<size_t>(l);
+        for (int c = 0; c < 3; ++c) buffers->s_in[c][at] = s_in[c];
+        if (k + i >= activation) {
+          const StokesVector measured = run.input_polarimeter.Measure(s_in);
+          for (int c = 0; c < 3; ++c) buffers->measured_in[c][at] = measured[c];
+        } else {
+          for (int c = 0; c < 3; ++c) buffers->measured_in[c][at] = s_in[c];
+        }
+      }
+    }
+    for (int l = real; l < (lanes.vector_input ? 0 : width); ++l) {  // padding: lane 0's input
+      for (int i = 0; i < count; ++i) {
+        const size_t at = static_cast<size_t>(i) * kMaxBatchLanes;
+        for (int c = 0; c < 3; ++c) {
+          buffers->s_in[c][at + static_cast<size_t>(l)] = buffers->s_in[c][at];
+          buffers->measured_in[c][at + static_cast<size_t>(l)] = buffers->measured_in[c][at];
+        }
+      }
+    }
+    block.first_sample = k;
+    block.count = count;
+    kernel(lanes, block);
+    // The statistics of the true output and of the updates, lane by lane.
+    for (int l = 0; l < real; ++l) {
+      Lane<Axes>& lane = *batch.lanes[static_cast<size_t>(l)];
+      RunStatistics& statistics = lane.run.statistics;
+      for (int i = 0; i < count; ++i) {
+        const int64_t sample = k + i;
+        if (sample < activation) continue;
+        const size_t at = static_cast<size_t>(i) * kMaxBatchLanes + static_cast<size_t>(l);
+        const double phi[4] = {buffers->phi_applied[0][at], buffers->phi_applied[1][at],
+                               buffers->phi_applied[2][at], buffers->phi_applied[3][at]};
+        statistics.AddSample(static_cast<double>(sample) * lane.sample_period_s,
+                             StokesVector(buffers->s_out[0][at], buffers->s_out[1][at],
+                                          buffers->s_out[2][at]),
+                             phi);
+        const uint8_t flags = buffers->flags[at];
+        const bool applied = (flags & kBatchApplied) != 0;
+        const bool near_singular = (flags & kBatchNearSingular) != 0;
+        const int rank = near_singular ? lane.rank[i] : 2;
+        statistics.AddUpdate((flags & kBatchNullspaceActive) != 0, !applied,
+                             applied && rank < 2, false,
+                             near_singular ? lane.singular_values[i]
+                                           : SingularValues::FromGram(
+                                                 buffers->gram[0][at], buffers->gram[1][at],
+                                                 buffers->gram[2][at], buffers->gram[3][at]));
+      }
+    }
+    k += count;
+  }
+
+  std::vector<SimulationResult> results;
+  for (int l = 0; l < real; ++l) {
+    ControlVector final_phi(N);
+    for (int e = 0; e < N; ++e) final_phi[e] = lanes.phi[e][l];
+    results.push_back(batch.lanes[static_cast<size_t>(l)]->run.Finish(total, 0, final_phi));
+  }
+  return results;
+}
+
+}  // namespace
+
+std::vector<SimulationResult> RunBatch(std::span<const ClosedLoopSimulator* const> simulators,
+                                       BatchIsa isa) {
+  if (isa == BatchIsa::kNone || simulators.empty() ||
+      simulators.size() > static_cast<size_t>(BatchLanesOf(isa))) {
+    throw std::invalid_argument("RunBatch: 1 to " + std::to_string(BatchLanesOf(isa)) +
+                                " simulators on a vector instruction set");
+  }
+  for (const ClosedLoopSimulator* simulator : simulators) {
+    if (!CanShareBatch(*simulators[0], *simulator)) {
+      throw std::invalid_argument(
+          "RunBatch: the runs do not share a batch (the fast path, stage axes, delay, sample "
+          "count and activation must be the same)");
+    }
+  }
+  const FusedUpdatePlan& plan = *simulators[0]->fast_path_plan();
+  return DispatchStageAxes(plan.axis, plan.stages, [&](const auto& axes) {
+    return RunBatchFor(simulators, isa, axes);
+  });
+}
+
+}  // namespace dpc
