@@ -44,10 +44,19 @@
 //            alternating: rate, overruns, missed state deadlines, loop latency p50/p99, CPU of
 //            the three services per sample
 //
+// --transport shm runs every section over shared memory (the profile with an SHM descriptor
+// before UDP), --transport both runs them over UDP and then over SHM, each in a process of its
+// own (the bench's rate, latency and failover over both, each beside raw references on the same
+// transport).
+//
 // The raw references' far sides are this binary again, in the internal modes --pong, --relay,
 // --command-echo and --raw-owner.
 
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -73,6 +82,12 @@ int main(int argc, char** argv) {
   int domain = 30;
   app.add_option("--domain", domain, "DDS domain (loopback profile)")->check(CLI::Range(0, 232));
   app.add_option("--only", only, "One section: raw,loop,rate,failover,tracking,record,instruments,memory,security,transport");
+  std::string transport = "udp";
+  app.add_option("--transport", transport,
+                 "The profile every section runs on: udp (FASTRTPS_DEFAULT_PROFILES_FILE or the shipped "
+                 "loopback profile), shm (the same with shared memory listed before UDP), or both (the "
+                 "sections over each, one after the other)")
+      ->check(CLI::IsMember({"udp", "shm", "both"}));
   CLI11_PARSE(app, argc, argv);
 
   // The internal modes: the far sides of the raw references, started by the sections.
@@ -81,8 +96,38 @@ int main(int argc, char** argv) {
   if (command_echo) return bench::RunCommandEcho(domain);
   if (raw_owner > 0) return bench::RunRawOwner(domain, raw_owner, 10000.0);
 
+  if (transport == "both") {
+    // A process per transport: Fast DDS reads its profiles once per process.
+    int failures = 0;
+    for (const char* each : {"udp", "shm"}) {
+      std::string command = fmt::format("'{}' --transport {} --domain {}{}", std::filesystem::read_symlink("/proc/self/exe").string(),
+                                        each, domain, quick ? " --quick" : "");
+      if (!only.empty()) command += " --only " + only;
+      fmt::print("==== transport {} ====\n", each);
+      std::fflush(stdout);
+      failures += std::system(command.c_str()) != 0;
+    }
+    return failures == 0 ? 0 : 1;
+  }
+
   const bench::BusBenchmarkHarness harness = bench::BusBenchmarkHarness::Create(domain, quick);
-  fmt::print("dpc_bus_benchmark: domain {}, logs in {}{}\n", harness.domain, harness.log_dir, quick ? " (quick)" : "");
+  if (transport == "shm") {
+    // Before any participant: the services inherit the variable, this process's raw references
+    // read it at their first participant.
+    const char* current = std::getenv("FASTRTPS_DEFAULT_PROFILES_FILE");
+    const std::string base = current != nullptr && *current ? current : DPC_SOURCE_DIR "/deploy/fastdds/loopback.xml";
+    std::ifstream in(base);
+    const std::string shm = bench::WithSharedMemory(std::string(std::istreambuf_iterator<char>(in), {}));
+    if (shm.empty()) {
+      fmt::print(stderr, "dpc_bus_benchmark: cannot add shared memory to {}\n", base);
+      return 2;
+    }
+    const std::string path = harness.log_dir + "/shm.xml";
+    std::ofstream(path) << shm;
+    setenv("FASTRTPS_DEFAULT_PROFILES_FILE", path.c_str(), 1);
+  }
+  fmt::print("dpc_bus_benchmark: domain {}, transport {}, logs in {}{}\n", harness.domain,
+             transport == "shm" ? "SHM + UDP" : "UDP", harness.log_dir, quick ? " (quick)" : "");
   auto want = [&](const char* section) { return only.empty() || only == section; };
   // The raw references alone only on request; the loop section measures them beside the bench.
   if (only == "raw") bench::RunRawSection(harness);

@@ -2,6 +2,8 @@
 // The sections of dpc_bus_benchmark, one file each: each prints its figures to stdout, takes
 // its run lengths from harness.quick and never asserts.
 
+#include <string>
+
 #include "harness.h"
 
 namespace dpc::bus_benchmark {
@@ -29,6 +31,9 @@ void RunSecuritySection(const BusBenchmarkHarness& harness);
 /// deadlines only, over SHM, and over SHM without deadlines, side by side: rate, loop latency,
 /// CPU per sample (transport_section.cc).
 void RunTransportSection(const BusBenchmarkHarness& harness);
+/// `xml` (a loopback profile) with a shared-memory transport descriptor listed before the UDP
+/// one ("" if it has no transports to extend).
+std::string WithSharedMemory(std::string xml);
 /// record: `dpc record` of a real-time bench at 2 and 10 kHz: the recorder's CPU, samples kept
 /// and missing (record_section.cc).
 void RunRecordSection(const BusBenchmarkHarness& harness);

@@ -43,20 +43,6 @@ std::string WithoutDeadlines(const std::string& xml, bool readers_only = false) 
   return out;
 }
 
-/// `xml` with a shared-memory transport descriptor, listed before the UDP one.
-std::string WithSharedMemory(std::string xml) {
-  const std::string descriptors = "<transport_descriptors>";
-  const std::string transports = "<userTransports>";
-  const size_t d = xml.find(descriptors);
-  const size_t t = xml.find(transports);
-  if (d == std::string::npos || t == std::string::npos) return {};
-  xml.insert(t + transports.size(), "\n          <transport_id>dpc_shm</transport_id>");
-  xml.insert(d + descriptors.size(),
-             "\n      <transport_descriptor>\n        <transport_id>dpc_shm</transport_id>\n"
-             "        <type>SHM</type>\n      </transport_descriptor>");
-  return xml;
-}
-
 /// Sets FASTRTPS_DEFAULT_PROFILES_FILE for the services started while it lives.
 class ScopedProfiles {
  public:
@@ -79,6 +65,19 @@ class ScopedProfiles {
 };
 
 }  // namespace
+
+std::string WithSharedMemory(std::string xml) {
+  const std::string descriptors = "<transport_descriptors>";
+  const std::string transports = "<userTransports>";
+  const size_t d = xml.find(descriptors);
+  const size_t t = xml.find(transports);
+  if (d == std::string::npos || t == std::string::npos) return {};
+  xml.insert(t + transports.size(), "\n          <transport_id>dpc_shm</transport_id>");
+  xml.insert(d + descriptors.size(),
+             "\n      <transport_descriptor>\n        <transport_id>dpc_shm</transport_id>\n"
+             "        <type>SHM</type>\n      </transport_descriptor>");
+  return xml;
+}
 
 void RunTransportSection(const BusBenchmarkHarness& harness) {
   const double seconds = harness.quick ? 5.0 : 20.0;
