@@ -319,13 +319,14 @@ std::vector<SimulationResult> RunBatchFor(std::span<const ClosedLoopSimulator* c
     block.first_sample = k;
     block.count = count;
     kernel(lanes, block);
-    // The statistics of the true output and of the updates, lane by lane.
-    for (int l = 0; l < real; ++l) {
-      Lane<Axes>& lane = *batch.lanes[static_cast<size_t>(l)];
-      RunStatistics& statistics = lane.run.statistics;
-      for (int i = 0; i < count; ++i) {
-        const int64_t sample = k + i;
-        if (sample < activation) continue;
+    // The statistics of the true output and of the updates, each lane's in order; sample by
+    // sample across the lanes, so that each cache line of the block is read once.
+    for (int i = std::max<int>(0, static_cast<int>(std::min<int64_t>(count, activation - k)));
+         i < count; ++i) {
+      const int64_t sample = k + i;
+      for (int l = 0; l < real; ++l) {
+        Lane<Axes>& lane = *batch.lanes[static_cast<size_t>(l)];
+        RunStatistics& statistics = lane.run.statistics;
         const size_t at = static_cast<size_t>(i) * kMaxBatchLanes + static_cast<size_t>(l);
         const double phi[4] = {buffers->phi_applied[0][at], buffers->phi_applied[1][at],
                                buffers->phi_applied[2][at], buffers->phi_applied[3][at]};
