@@ -357,6 +357,9 @@ TEST_F(DpcCliTest, SweepPrintsATableAndJsonLines) {
   std::istringstream lines(r.out);
   for (std::string line; std::getline(lines, line);) rows += line.rfind("scenario", 0) == 0;
   EXPECT_EQ(rows, 4) << r.out;
+  // How fast, and how (SIMD batches or one run per thread), on stderr.
+  EXPECT_NE(r.err.find("dpc sweep: 8 runs, "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(" M samples/s on "), std::string::npos) << r.err;
   EXPECT_TRUE(fs::exists(dir_ / "s.png"));
   EXPECT_NE(Slurp(dir_ / "s.csv").find("error_deg_mean"), std::string::npos);
   const Result json = Run("sweep --methods gp --rates 1e3,1e4 --duration-s 1e-3 --activation-s "

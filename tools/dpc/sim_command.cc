@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <atomic>
 #include <cmath>
 #include <csignal>
@@ -98,6 +99,7 @@ cli::ExitCode RunSeeds(const SimOptions& o, const ScenarioConfig& base, const st
   g_interrupted.store(false);
   const auto previous_int = std::signal(SIGINT, OnInterrupt);
   const auto previous_term = std::signal(SIGTERM, OnInterrupt);
+  const auto sweep_start = std::chrono::steady_clock::now();
   const std::vector<SweepOutcome> outcomes = RunSweep(
       scenarios, 0,
       [&](size_t done, size_t total) { progress.Update(static_cast<int64_t>(done), static_cast<int64_t>(total)); },
@@ -105,6 +107,10 @@ cli::ExitCode RunSeeds(const SimOptions& o, const ScenarioConfig& base, const st
   std::signal(SIGINT, previous_int);
   std::signal(SIGTERM, previous_term);
   progress.Finish();
+  fmt::print(stderr, "dpc sim: {}\n",
+             cli::DescribeSweepSpeed(outcomes, 0, std::chrono::duration<double>(
+                                                      std::chrono::steady_clock::now() - sweep_start)
+                                                      .count()));
 
   // The figures compared over seeds: name, unit, and how to read them from a run.
   struct Figure {

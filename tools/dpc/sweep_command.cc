@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <atomic>
 #include <cmath>
 #include <csignal>
@@ -166,12 +167,17 @@ cli::ExitCode RunSweepCommand(const SweepOptions& o) {
   ProgressBar progress("dpc sweep", !o.no_progress && ProgressBar::StderrIsTerminal());
   g_stop.store(false);
   const auto previous_int = std::signal(SIGINT, OnSweepInterrupt);
+  const auto sweep_start = std::chrono::steady_clock::now();
   const std::vector<SweepOutcome> outcomes =
       RunSweep(scenarios, o.jobs, [&](size_t done, size_t total) {
         progress.Update(static_cast<int64_t>(done), static_cast<int64_t>(total));
       }, &g_stop);
   std::signal(SIGINT, previous_int);
   progress.Finish();
+  fmt::print(stderr, "dpc sweep: {}\n",
+             cli::DescribeSweepSpeed(outcomes, o.jobs, std::chrono::duration<double>(
+                                                           std::chrono::steady_clock::now() - sweep_start)
+                                                           .count()));
 
   for (size_t i = 0; i < outcomes.size(); ++i) {
     Cell& cell = cells[cell_of_run[i]];

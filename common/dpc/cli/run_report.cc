@@ -2,10 +2,13 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <thread>
 
 #include "dpc/config/scenario_validation.h"
 #include "dpc/control/control_law_factory.h"
+#include "dpc/sim/batch_simulator.h"
 
 namespace dpc::cli {
 namespace {
@@ -214,6 +217,25 @@ std::string RunReportText(const RunDescription& run, const SimulationResult& res
                       r.rank_deficient_updates, r.clamped_updates, r.resets, r.sigma_min_min,
                       100.0 * r.near_singular_fraction);
   return text;
+}
+
+std::string DescribeSweepSpeed(const std::vector<SweepOutcome>& outcomes, int threads, double wall_s) {
+  int64_t samples = 0;
+  for (const SweepOutcome& outcome : outcomes) {
+    if (outcome.ok) samples += outcome.result.summary.samples;
+  }
+  const size_t hardware = std::max(1u, std::thread::hardware_concurrency());
+  const size_t used = std::min(threads > 0 ? static_cast<size_t>(threads) : hardware,
+                               std::max<size_t>(1, outcomes.size()));
+  const BatchIsa isa = ChosenBatchIsa();
+  return fmt::format("{} run{}, {:.2g} samples in {:.2f} s: {:.1f} M samples/s on {} thread{}, {}",
+                     outcomes.size(), outcomes.size() == 1 ? "" : "s", static_cast<double>(samples),
+                     wall_s, wall_s > 0.0 ? static_cast<double>(samples) / wall_s / 1e6 : 0.0, used,
+                     used == 1 ? "" : "s",
+                     isa == BatchIsa::kNone
+                         ? std::string("one run at a time per thread (no SIMD batches)")
+                         : fmt::format("runs of one kind in {} batches of up to {}", BatchIsaName(isa),
+                                       BatchLanesOf(isa)));
 }
 
 }  // namespace dpc::cli

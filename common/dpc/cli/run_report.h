@@ -10,6 +10,7 @@
 
 #include "dpc/config/scenario_config.h"
 #include "dpc/sim/closed_loop_simulator.h"
+#include "dpc/sim/sweep_runner.h"
 
 namespace dpc::cli {
 
@@ -41,5 +42,9 @@ double InputRateRadPerS(const ScenarioConfig& scenario);
 
 /// A human-readable multi-line summary (the default output of `dpc sim`).
 std::string RunReportText(const RunDescription& run, const SimulationResult& result);
+
+/// How fast a sweep ran (RunSweep with `threads`, in `wall_s`): "12 runs, 6.0e+06 samples in
+/// 0.21 s: 28.6 M samples/s on 2 threads, in avx512 batches of up to 8 runs".
+std::string DescribeSweepSpeed(const std::vector<SweepOutcome>& outcomes, int threads, double wall_s);
 
 }  // namespace dpc::cli
