@@ -123,6 +123,12 @@ int ServiceMain(int argc, char** argv, const std::string& description) {
     return cli::ToInt(app.exit(e) == 0 ? cli::ExitCode::kOk : cli::ExitCode::kInvalidInput);
   }
   SetUpLogging(S::LogName(options), common);
+  // Before the participant: its threads inherit the scheduling.
+  if (const std::string problem = ApplyRealtimePriority(common.realtime_priority); !problem.empty()) {
+    spdlog::error("cannot start: {}", problem);
+    return cli::ToInt(cli::ExitCode::kInitializationError);
+  }
+  if (common.realtime_priority > 0) spdlog::info("real-time priority {} (SCHED_FIFO)", common.realtime_priority);
   std::unique_ptr<S> service;
   try {
     service = std::make_unique<S>(common, options);

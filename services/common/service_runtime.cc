@@ -1,5 +1,9 @@
 #include "service_runtime.h"
 
+#include <sched.h>
+
+#include <cerrno>
+#include <cstring>
 #include <memory>
 
 #include <spdlog/sinks/stdout_sinks.h>
@@ -41,6 +45,12 @@ void AddCommonOptions(CLI::App& app, CommonOptions* options) {
                  "DDS Security: the identity in --security-dir (default: the service's role: "
                  "driver, polarimeter, controller-<id>)")
       ->envname("DPC_IDENTITY");
+  app.add_option("--realtime-priority", options->realtime_priority,
+                 "Run under SCHED_FIFO at this priority (1-99; 0: the default scheduling): the bench's "
+                 "processes then run before any ordinary one; needs CAP_SYS_NICE or ulimit -r")
+      ->envname("DPC_REALTIME_PRIORITY")
+      ->check(CLI::Range(0, 99))
+      ->capture_default_str();
   app.add_option("--log-level", options->log_level, "trace|debug|info|warn|error|off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}))
       ->capture_default_str();
@@ -61,6 +71,19 @@ ScenarioConfig LoadServiceScenario(const CommonOptions& options, const char* def
 
 std::string DescribeError(const ScenarioError& error, const CommonOptions& options) {
   return cli::DescribeScenarioError(error, options.overrides);
+}
+
+std::string ApplyRealtimePriority(int priority) {
+  if (priority == 0) return {};
+  sched_param parameters{};
+  parameters.sched_priority = priority;
+  if (sched_setscheduler(0, SCHED_FIFO, &parameters) != 0) {
+    const int error = errno;
+    return fmt::format("--realtime-priority {}: SCHED_FIFO refused ({}); it needs CAP_SYS_NICE or an "
+                       "RLIMIT_RTPRIO of at least {} (ulimit -r)",
+                       priority, std::strerror(error), priority);
+  }
+  return {};
 }
 
 void SetUpLogging(const std::string& service, const CommonOptions& options) {

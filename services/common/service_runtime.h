@@ -26,6 +26,7 @@ struct CommonOptions {
   cli::ScenarioOverrides overrides;   ///< the `dpc sim` flags (--method, --step, --rate-rad-per-s, …)
   std::string security_dir;    ///< DDS Security credentials (make-bench-pki.sh); empty: off
   std::string identity;        ///< the identity in it; empty: the service's own role
+  int realtime_priority = 0;   ///< SCHED_FIFO priority (1–99) for the service's threads; 0: off
 };
 
 /// "" if `id` may name a bench or a controller (1–63 of A–Z a–z 0–9 _ -: it becomes part of a
@@ -50,6 +51,12 @@ ScenarioConfig LoadServiceScenario(const CommonOptions& options, const char* def
 
 /// "invalid scenario: controller.step: … (set by --step)".
 std::string DescribeError(const ScenarioError& error, const CommonOptions& options);
+
+/// Puts the calling thread, and the threads it starts from then on (Fast DDS's), under
+/// SCHED_FIFO at `priority` (0: leaves the scheduling as it is). On a busy machine this keeps
+/// the bench's processes running while others (a kill -9 being reaped, a build) wait. Returns
+/// why it could not (it needs CAP_SYS_NICE or an RLIMIT_RTPRIO as high), or "".
+std::string ApplyRealtimePriority(int priority);
 
 /// Sets up spdlog ("[driver bench1] …" on stderr) at options.log_level (one of the names
 /// --log-level accepts; the option checks it). Calling it again replaces the logger.

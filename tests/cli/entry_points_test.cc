@@ -58,6 +58,18 @@ TEST_F(EntryPointsTest, AnUnknownOptionIsNamedNotTakenForAScenarioFile) {
                 "dpc-emulator: unknown option --dac-bit (did you mean --dac-bits?)");
 }
 
+TEST_F(EntryPointsTest, ServicesRunUnderARealTimePriorityOrSayWhyNot) {
+  ExpectRefused(RunBinary(DPC_POLARIMETER_BINARY, {"--realtime-priority", "100"}), "--realtime-priority");
+  const Result r = RunBinary(DPC_POLARIMETER_BINARY,
+                             {"--realtime-priority", "3", "--run-s", "0.3", "--rate-hz", "500", "--domain", "178"});
+  if (r.exit_code == 0) {
+    EXPECT_NE(r.err.find("real-time priority 3 (SCHED_FIFO)"), std::string::npos) << r.err;
+  } else {  // a machine without CAP_SYS_NICE: refused at start, saying what it needs
+    EXPECT_EQ(r.exit_code, 4) << r.err;
+    EXPECT_NE(r.err.find("CAP_SYS_NICE"), std::string::npos) << r.err;
+  }
+}
+
 TEST_F(EntryPointsTest, KnownOptionsValuesAndHelpStillParse) {
   EXPECT_EQ(Dpc("sim --help").exit_code, 0);
   EXPECT_EQ(Dpc("topic echo --help").exit_code, 0);
