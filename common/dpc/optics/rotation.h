@@ -62,8 +62,10 @@ inline constexpr double kSmallAngleLimit = 0.0078125;
 
 /// sin and cos of |x| < kSmallAngleLimit by their Taylor series (no branch, ~12 flops).
 /// Truncation: x^9/9! < 1e-24 ≈ 1e-22·|x| and x^8/8! < 4e-22 for |x| < 2^-7, far below 1 ulp.
-inline void SmallAngleSinCos(double x, double* s, double* c) {
-  const double x2 = x * x;
+/// T: double, or a vector of doubles (the batched simulator's lanes, sim/batch_kernel_impl.h).
+template <typename T>
+inline void SmallAngleSinCos(T x, T* s, T* c) {
+  const T x2 = x * x;
   *s = x * (1.0 + x2 * (-1.0 / 6 + x2 * (1.0 / 120 + x2 * (-1.0 / 5040))));
   *c = 1.0 + x2 * (-0.5 + x2 * (1.0 / 24 + x2 * (-1.0 / 720)));
 }
@@ -76,12 +78,17 @@ inline void SmallAngleSinCos(double x, double* s, double* c) {
 /// development VM's Zen 5 a multiply feeding an add takes 6 cycles, a fused multiply-add 4.
 /// The same build gives the same bits on every run; a build without FMA (-DDPC_X86_64_V3=OFF)
 /// rounds these twice and so differs from the default build in the last bits of such results.
-[[gnu::always_inline]] inline double MulAdd(double a, double b, double c) {
 #ifdef __FMA__
-  return std::fma(a, b, c);
+inline constexpr bool kMulAddIsFused = true;
 #else
-  return a * b + c;
+inline constexpr bool kMulAddIsFused = false;
 #endif
+[[gnu::always_inline]] inline double MulAdd(double a, double b, double c) {
+  if constexpr (kMulAddIsFused) {
+    return std::fma(a, b, c);
+  } else {
+    return a * b + c;
+  }
 }
 
 /// SmallAngleSinCos by fused multiply-adds (MulAdd): the same series and accuracy, a shorter

@@ -34,8 +34,9 @@ struct BatchLanes {
   int64_t delay_samples = 1;
   int64_t activation_sample = 0;
   /// The scalar build's arithmetic and constants, so that a lane repeats its operations:
-  /// whether MulAdd is one fused multiply-add, FusedGradientProjection's det G threshold, the
-  /// pose's updates by angle addition between exact evaluations.
+  /// whether MulAdd is one fused multiply-add (kMulAddIsFused as the baseline build sees it),
+  /// FusedGradientProjection's det G threshold, the pose's updates by angle addition between
+  /// exact evaluations.
   bool fused_multiply_add = false;
   double well_conditioned = 0.0;
   int64_t max_incremental_steps = 0;

@@ -157,9 +157,8 @@ void RunBatchBlockFor(BatchLanes& lanes, const BatchBlock& block, const Axes& ax
         if (kick_bits != 0) {
           // SinCos: the series below kSmallAngleLimit, the library beyond (the scalar build's).
           const V a = kick_sigma * Math::Load(block.normals + at);
-          const V a2 = a * a;
-          V s = a * (1.0 + a2 * (-1.0 / 6 + a2 * (1.0 / 120 + a2 * (-1.0 / 5040))));
-          V c = 1.0 + a2 * (-0.5 + a2 * (1.0 / 24 + a2 * (-1.0 / 720)));
+          V s, c;
+          SmallAngleSinCos(a, &s, &c);
           const M series = (a > -kSmallAngleLimit) & (a < kSmallAngleLimit);
           for (unsigned bits = kick_bits & ~Math::Bits(series); bits != 0; bits &= bits - 1) {
             const int l = __builtin_ctz(bits);
@@ -196,29 +195,26 @@ void RunBatchBlockFor(BatchLanes& lanes, const BatchBlock& block, const Axes& ax
       slot = slot + 1 == line_size ? 0 : slot + 1;
       continue;
     }
-    // The readings.
+    // The readings: a polarimeter with noise reads the lanes in `bits` through `measure`.
+    const auto read = [&](unsigned bits, auto measure, V& rx, V& ry, V& rz) {
+      for (; bits != 0; bits &= bits - 1) {
+        const int l = __builtin_ctz(bits);
+        const double truth[3] = {rx[l], ry[l], rz[l]};
+        double measured[3];
+        measure(lanes.context, l, truth, measured);
+        rx[l] = measured[0], ry[l] = measured[1], rz[l] = measured[2];
+      }
+    };
     V in_x, in_y, in_z;
     if (lanes.vector_input) {
       in_x = sop_x, in_y = sop_y, in_z = sop_z;
-      for (unsigned bits = noisy_input; bits != 0; bits &= bits - 1) {
-        const int l = __builtin_ctz(bits);
-        const double s_in[3] = {sop_x[l], sop_y[l], sop_z[l]};
-        double measured[3];
-        lanes.measure_input(lanes.context, l, s_in, measured);
-        in_x[l] = measured[0], in_y[l] = measured[1], in_z[l] = measured[2];
-      }
+      read(noisy_input, lanes.measure_input, in_x, in_y, in_z);
     } else {
       in_x = Math::Load(block.measured_in[0] + at), in_y = Math::Load(block.measured_in[1] + at),
       in_z = Math::Load(block.measured_in[2] + at);
     }
     V out_x = x, out_y = y, out_z = z;
-    for (unsigned bits = noisy; bits != 0; bits &= bits - 1) {
-      const int l = __builtin_ctz(bits);
-      const double s_out[3] = {x[l], y[l], z[l]};
-      double measured[3];
-      lanes.measure_output(lanes.context, l, s_out, measured);
-      out_x[l] = measured[0], out_y[l] = measured[1], out_z[l] = measured[2];
-    }
+    read(noisy, lanes.measure_output, out_x, out_y, out_z);
 
     // FusedGradientProjection::Update, lane by lane. The tangent basis at the measured S_in.
     V e1[3], e2[3];
