@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <thread>
 
 #include "dpc/config/scenario_validation.h"
 #include "dpc/control/control_law_factory.h"
@@ -224,9 +223,7 @@ std::string DescribeSweepSpeed(const std::vector<SweepOutcome>& outcomes, int th
   for (const SweepOutcome& outcome : outcomes) {
     if (outcome.ok) samples += outcome.result.summary.samples;
   }
-  const size_t hardware = std::max(1u, std::thread::hardware_concurrency());
-  const size_t used = std::min(threads > 0 ? static_cast<size_t>(threads) : hardware,
-                               std::max<size_t>(1, outcomes.size()));
+  const int used = SweepThreads(threads, std::max<size_t>(1, outcomes.size()));
   const BatchIsa isa = ChosenBatchIsa();
   return fmt::format("{} run{}, {:.2g} samples in {:.2f} s: {:.1f} M samples/s on {} thread{}, {}",
                      outcomes.size(), outcomes.size() == 1 ? "" : "s", static_cast<double>(samples),

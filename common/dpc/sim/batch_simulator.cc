@@ -55,15 +55,18 @@ const char* BatchIsaName(BatchIsa isa) {
   return "none";
 }
 
+std::optional<BatchKey> BatchKeyOf(const ClosedLoopSimulator& simulator) {
+  const std::optional<FusedUpdatePlan>& plan = simulator.fast_path_plan();
+  if (!plan) return std::nullopt;
+  std::array<int, 4> axes = {-1, -1, -1, -1};
+  for (int e = 0; e < plan->stages; ++e) axes[static_cast<size_t>(e)] = static_cast<int>(plan->axis[e]);
+  return BatchKey{plan->stages, axes, simulator.delay_samples(), simulator.total_samples(),
+                  simulator.activation_sample()};
+}
+
 bool CanShareBatch(const ClosedLoopSimulator& a, const ClosedLoopSimulator& b) {
-  const std::optional<FusedUpdatePlan>& pa = a.fast_path_plan();
-  const std::optional<FusedUpdatePlan>& pb = b.fast_path_plan();
-  if (!pa || !pb || pa->stages != pb->stages) return false;
-  for (int e = 0; e < pa->stages; ++e) {
-    if (pa->axis[e] != pb->axis[e]) return false;
-  }
-  return a.delay_samples() == b.delay_samples() && a.total_samples() == b.total_samples() &&
-         a.activation_sample() == b.activation_sample();
+  const std::optional<BatchKey> key = BatchKeyOf(a);
+  return key.has_value() && key == BatchKeyOf(b);
 }
 
 namespace {
@@ -196,7 +199,7 @@ std::vector<SimulationResult> RunBatchFor(std::span<const ClosedLoopSimulator* c
   for (int e = 0; e < N; ++e) lanes.axis[e] = first_plan.axis[e];
   lanes.delay_samples = delay;
   lanes.activation_sample = activation;
-  lanes.fused_multiply_add = MulAdd(1.0 + 0x1p-52, 1.0 - 0x1p-52, -1.0) != 0.0;
+  lanes.fused_multiply_add = kMulAddIsFused;
   lanes.well_conditioned = FusedGradientProjection<Axes>::kWellConditioned;
   lanes.max_incremental_steps = WaveplateChain::kMaxIncrementalSteps;
   lanes.context = &batch;

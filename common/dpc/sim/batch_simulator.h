@@ -14,7 +14,10 @@
 // one binary uses AVX-512 where the processor has it, AVX2 elsewhere, and the scalar loop on a
 // processor with neither.
 
+#include <array>
+#include <optional>
 #include <span>
+#include <tuple>
 #include <vector>
 
 #include "dpc/sim/closed_loop_simulator.h"
@@ -33,8 +36,13 @@ int BatchLanesOf(BatchIsa isa);
 /// "avx512", "avx2", "none".
 const char* BatchIsaName(BatchIsa isa);
 
-/// Whether the two simulators' runs may be lanes of one batch (both on the fast path, with the
-/// same stage axes, delay, sample count and activation sample).
+/// What the runs of one batch have in common: the stage count and axes, the delay, the sample
+/// count and the activation sample.
+using BatchKey = std::tuple<int, std::array<int, 4>, int64_t, int64_t, int64_t>;
+/// The simulator's key, or nullopt when it is not on the fast path (it runs alone).
+std::optional<BatchKey> BatchKeyOf(const ClosedLoopSimulator& simulator);
+
+/// Whether the two simulators' runs may be lanes of one batch: both have a BatchKeyOf, the same.
 bool CanShareBatch(const ClosedLoopSimulator& a, const ClosedLoopSimulator& b);
 
 /// Runs the simulators (1 … BatchLanesOf(isa) of them, pairwise CanShareBatch; isa not kNone),

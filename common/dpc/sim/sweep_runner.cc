@@ -5,23 +5,11 @@
 #include <memory>
 #include <mutex>
 #include <thread>
-#include <tuple>
 
 #include "dpc/sim/batch_simulator.h"
 
 namespace dpc {
 namespace {
-
-// What runs that may share a batch have in common (CanShareBatch).
-using BatchKey = std::tuple<int, int, int, int, int, int64_t, int64_t, int64_t>;
-
-BatchKey KeyOf(const ClosedLoopSimulator& simulator) {
-  const FusedUpdatePlan& plan = *simulator.fast_path_plan();
-  int axis[4] = {-1, -1, -1, -1};
-  for (int e = 0; e < plan.stages; ++e) axis[e] = static_cast<int>(plan.axis[e]);
-  return {plan.stages, axis[0], axis[1], axis[2], axis[3], simulator.delay_samples(),
-          simulator.total_samples(), simulator.activation_sample()};
-}
 
 // The work: groups of runs, each a batch (or a run alone). Runs of one key are split into as few
 // batches as the lanes allow, but into at least as many as there are threads (while there are
@@ -34,11 +22,9 @@ std::vector<std::vector<size_t>> PlanWork(const std::vector<ScenarioConfig>& sce
   for (size_t i = 0; i < scenarios.size(); ++i) {
     if (width > 1) {
       try {
-        const ClosedLoopSimulator simulator(scenarios[i]);
-        if (simulator.uses_fast_path()) {
-          const BatchKey key = KeyOf(simulator);
-          auto [it, added] = by_key.try_emplace(key);
-          if (added) key_order.push_back(key);
+        if (const std::optional<BatchKey> key = BatchKeyOf(ClosedLoopSimulator(scenarios[i]))) {
+          auto [it, added] = by_key.try_emplace(*key);
+          if (added) key_order.push_back(*key);
           it->second.push_back(i);
           continue;
         }
@@ -66,12 +52,16 @@ std::vector<std::vector<size_t>> PlanWork(const std::vector<ScenarioConfig>& sce
 
 }  // namespace
 
+int SweepThreads(int threads, size_t runs) {
+  if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return static_cast<int>(std::min<size_t>(static_cast<size_t>(threads), runs));
+}
+
 std::vector<SweepOutcome> RunSweep(const std::vector<ScenarioConfig>& scenarios, int threads,
                                    const std::function<void(size_t, size_t)>& progress,
                                    const std::atomic<bool>* stop) {
   std::vector<SweepOutcome> outcomes(scenarios.size());
-  if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  threads = static_cast<int>(std::min<size_t>(static_cast<size_t>(threads), scenarios.size()));
+  threads = SweepThreads(threads, scenarios.size());
   const BatchIsa isa = ChosenBatchIsa();
   const std::vector<std::vector<size_t>> work =
       PlanWork(scenarios, static_cast<size_t>(BatchLanesOf(isa)), static_cast<size_t>(threads));

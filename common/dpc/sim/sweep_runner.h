@@ -27,6 +27,10 @@ struct SweepOutcome {
   SimulationResult result;
 };
 
+/// The worker threads RunSweep starts for `runs` runs when asked for `threads` (≤ 0: one per
+/// hardware thread; never more than the runs).
+int SweepThreads(int threads, size_t runs);
+
 /// Runs every scenario; `threads` ≤ 0 means std::thread::hardware_concurrency(). `progress` (if
 /// set) is called after each run finishes, serialized, with (finished, total). If `stop` becomes
 /// true, runs not yet started are skipped (ok = false, error = "skipped").
