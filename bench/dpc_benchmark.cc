@@ -30,6 +30,7 @@
 #include "dpc/control/polarization_controller.h"
 #include "dpc/sim/batch_simulator.h"
 #include "dpc/sim/closed_loop_simulator.h"
+#include "dpc/sim/run_statistics.h"
 #include "dpc/sim/sweep_runner.h"
 
 namespace dpc {
@@ -284,6 +285,39 @@ void BM_SimulatorBatch(benchmark::State& state) {
 
 // A sweep as `dpc sweep` runs it (RunSweep: batches in the widest lanes, on every core): 4 seeds
 // per core and lane of the paper scenario; samples per second of wall time.
+// The simulator's statistics alone (RunStatistics::AddSample and its batched Flush), in samples
+// per second: a locked output wandering ~0.1° around the paper's target and `controls` slowly
+// drifting controls, as the paper scenario feeds them.
+void BM_Statistics(benchmark::State& state) {
+  const int controls = static_cast<int>(state.range(0));
+  constexpr int kSamples = 1 << 16;
+  std::mt19937_64 engine(7);
+  std::normal_distribution<double> normal(0.0, 1e-3);
+  std::vector<StokesVector> outputs(kSamples);
+  std::vector<double> phi(static_cast<size_t>(kSamples) * controls);
+  double drift[8] = {0.3, -0.7, 1.1, 0.2, 0.5, -0.4, 0.9, 0.6};
+  for (int i = 0; i < kSamples; ++i) {
+    outputs[i] = (kPaperTarget.point() + StokesVector(normal(engine), normal(engine),
+                                                      normal(engine))).normalized();
+    for (int c = 0; c < controls; ++c) {
+      drift[c] += 1e-4 * normal(engine) * 1e3;
+      phi[static_cast<size_t>(i) * controls + c] = drift[c];
+    }
+  }
+  RunStatistics statistics(kPaperTarget, controls, 0.0, 1.0, std::nullopt);
+  int64_t samples = 0;
+  for (auto _ : state) {
+    for (int i = 0; i < kSamples; ++i) {
+      statistics.AddSample(static_cast<double>(samples + i) * 2e-8, outputs[i],
+                           phi.data() + static_cast<size_t>(i) * controls);
+    }
+    samples += kSamples;
+  }
+  benchmark::DoNotOptimize(statistics.Summarize(samples, 0).error_deg.mean);
+  state.counters["samples_per_s"] =
+      benchmark::Counter(static_cast<double>(samples), benchmark::Counter::kIsRate);
+}
+
 void BM_Sweep(benchmark::State& state) {
   const int stages = static_cast<int>(state.range(0));
   const int threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -364,6 +398,7 @@ void RegisterAll() {
       ->Args({3, 2})
       ->Args({4, 2})
       ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("Statistics", BM_Statistics)->Arg(3)->Arg(4);
   benchmark::RegisterBenchmark("Sweep/all-cores", BM_Sweep)
       ->Arg(3)
       ->Arg(4)
@@ -504,6 +539,22 @@ void PrintSummary(const std::map<std::string, CollectingReporter::Entry>& e) {
                                          verdict(sim->samples_per_s, 25e6, 20e6, false))
                            : "");
   }
+  // Where a sample of one trajectory goes: the update's dependency chain, the statistics (their
+  // benchmark alone), and the rest (input, plant, what did not overlap).
+  for (int stages : {4, 3}) {
+    const auto* sim = find(fmt::format("Simulator/gp/{}/0", stages));
+    const auto* update = find(fmt::format("ControlLoop/gp/{}/0", stages));
+    const auto* statistics = find(fmt::format("Statistics/{}", stages));
+    if (!sim || !update || !statistics || sim->samples_per_s <= 0 || statistics->samples_per_s <= 0) {
+      continue;
+    }
+    const double sample_ns = 1e9 / sim->samples_per_s;
+    const double statistics_ns = 1e9 / statistics->samples_per_s;
+    fmt::print("  a sample of one trajectory, {} stages: {:.1f} ns = update {:.1f} ns + statistics "
+               "{:.1f} ns (alone) + the rest {:.1f} ns\n",
+               stages, sample_ns, update->ns_per_iteration, statistics_ns,
+               sample_ns - update->ns_per_iteration - statistics_ns);
+  }
   for (int stages : {4, 3}) {
     const auto* sim = find(fmt::format("Simulator/gp/{}/0", stages));
     for (const auto& [isa, arg, goal] : {std::tuple{"avx2", 1, 60e6}, std::tuple{"avx512", 2, 100e6}}) {
@@ -517,6 +568,14 @@ void PrintSummary(const std::map<std::string, CollectingReporter::Entry>& e) {
                                            verdict(batch->samples_per_s, goal, goal, false))
                              : "");
     }
+  }
+  for (int stages : {4, 3}) {
+    // Each lane keeps its own statistics, fed sample by sample: they alone bound a batch.
+    const auto* statistics = find(fmt::format("Statistics/{}", stages));
+    if (!statistics || statistics->samples_per_s <= 0) continue;
+    fmt::print("  the statistics alone, {} stages:   {:6.2f} M samples/s on one core (the most any "
+               "batch can reach)\n",
+               stages, statistics->samples_per_s / 1e6);
   }
   for (int stages : {4, 3}) {
     const auto* sweep = find(fmt::format("Sweep/all-cores/{}/real_time", stages));

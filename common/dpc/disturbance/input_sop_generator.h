@@ -60,6 +60,53 @@ class InputSopGenerator {
     return sop_;
   }
 
+  /// The most samples one block (BeginBlock) holds.
+  static constexpr int kMaxBlock = 64;
+
+  /// Where a block's SOP chain stands: kept by the caller (a local, so in registers) while it
+  /// steps through the block. See BeginBlock.
+  struct BlockCursor {
+    double x, y, z;
+  };
+
+  /// Real-time. The input a block at a time, for a loop that interleaves it with other work (the
+  /// simulator's fast path):
+  ///
+  ///   BlockCursor cursor = input.BeginBlock(count);         // 0 ≤ count ≤ kMaxBlock
+  ///   for (int i = 0; i < count; ++i) s_in = input.Step(i, &cursor);  // in this order
+  ///   input.EndBlock(cursor);
+  ///
+  /// gives, bit for bit, what `count` calls of Next() would. For the paper's scrambler alone on
+  /// elemental axes, BeginBlock draws the block's normals and computes its kicks' sines (none of
+  /// which depends on the SOP, so they overlap in the pipeline), and each Step is only the
+  /// rotations and the renormalization: the short chain from one SOP to the next, which the
+  /// caller's other work hides. Any other input is advanced by Next() in BeginBlock and read back
+  /// by Step. Throws std::invalid_argument for a count out of range (not real-time then).
+  BlockCursor BeginBlock(int count);
+
+  /// Real-time. S_in of the block's sample i; see BeginBlock.
+  [[gnu::always_inline]] StokesVector Step(int i, BlockCursor* cursor) const {
+    if (!block_chained_) return block_sops_[i];
+    double x = cursor->x, y = cursor->y, z = cursor->z;
+    if (i < block_first_) return StokesVector(x, y, z);  // the initial SOP: nothing applied
+    // PaperScrambler::Advance and RenormalizeNearUnit (with Eigen's squaredNorm order).
+    if (block_paper_axes_) {  // the axes fixed: RotateElemental's switch folds away
+      RotateElemental(ElementalAxis::kS3, block_step_cos_, block_step_sin_, x, y, z);
+      RotateElemental(ElementalAxis::kS2, block_cos_kick_[i], block_sin_kick_[i], x, y, z);
+    } else {
+      RotateElemental(block_step_axis_, block_step_cos_, block_step_sin_, x, y, z);
+      RotateElemental(block_kick_axis_, block_cos_kick_[i], block_sin_kick_[i], x, y, z);
+    }
+    const double factor = 0.5 * (3.0 - ((x * x + y * y) + z * z));
+    *cursor = BlockCursor{x * factor, y * factor, z * factor};
+    return StokesVector(cursor->x, cursor->y, cursor->z);
+  }
+
+  /// Real-time. Ends the block: the generator goes on from its last SOP.
+  void EndBlock(const BlockCursor& cursor) {
+    if (block_chained_) sop_ = StokesVector(cursor.x, cursor.y, cursor.z);
+  }
+
   /// The index k of the sample the last Next() returned; −1 before the first call.
   int64_t sample_index() const { return next_index_ - 1; }
   /// The SOP the last Next() returned (the initial SOP before the first call).
@@ -84,6 +131,16 @@ class InputSopGenerator {
   StokesVector sop_;
   int64_t next_index_ = 0;
   PaperScrambler* only_scrambler_ = nullptr;  ///< set when it is the only disturbance
+
+  // The block of BeginBlock / Step.
+  bool block_chained_ = false;  ///< Step runs the scrambler (else it reads block_sops_)
+  int block_first_ = 0;         ///< 1 when the block starts with the initial SOP
+  bool block_paper_axes_ = false;  ///< the paper's: about S3, kicks about S2
+  ElementalAxis block_step_axis_ = ElementalAxis::kGeneral;
+  ElementalAxis block_kick_axis_ = ElementalAxis::kGeneral;  ///< kGeneral: no kicks
+  double block_step_cos_ = 1.0, block_step_sin_ = 0.0;
+  double block_cos_kick_[kMaxBlock] = {}, block_sin_kick_[kMaxBlock] = {};
+  StokesVector block_sops_[kMaxBlock];
 };
 
 /// Not real-time. The generator for `input` (MakeDisturbance for each entry, in order; a

@@ -29,7 +29,15 @@ class PolarimeterNoise {
 
   /// Real-time. A noisy reading of the unit Stokes vector `s`: two normal draws when σ > 0.
   StokesVector Measure(const StokesVector& s) {
-    if (sigma_rad_ == 0.0) return s;
+    if (sigma_rad_ == 0.0) return s;  // inlined: a noiseless polarimeter costs a compare
+    return MeasureNoisy(s);
+  }
+
+  double sigma_deg() const { return sigma_deg_; }
+  double sigma_rad() const { return sigma_rad_; }
+
+ private:
+  [[gnu::noinline]] StokesVector MeasureNoisy(const StokesVector& s) {
     const double n1 = random_.Normal(), n2 = random_.Normal();
     const double norm = std::sqrt(n1 * n1 + n2 * n2);
     if (!(norm > 0.0)) return s;
@@ -40,10 +48,6 @@ class PolarimeterNoise {
     return cos_angle * s + (sin_angle / norm) * (n1 * e1 + n2 * e2);
   }
 
-  double sigma_deg() const { return sigma_deg_; }
-  double sigma_rad() const { return sigma_rad_; }
-
- private:
   double sigma_deg_;
   double sigma_rad_;
   RandomSource random_;

@@ -54,9 +54,20 @@ SimulationResult ClosedLoopSimulator::RunFastPath(const Axes& axes, SimulationOb
   Measured measured[2];  // sample k in measured[k & 1]
   // The input, the plant (the command of D samples ago), the observer, the statistics and the
   // polarimeters of `sample`, whose pose is in `slot`.
-  const auto observe = [&](int64_t sample, int64_t slot) {
+  // The input a block at a time: its random draws batched, its rotations interleaved here.
+  constexpr int64_t kInputBlock = InputSopGenerator::kMaxBlock;
+  InputSopGenerator::BlockCursor input_cursor{};
+  const auto observe = [&](int64_t sample, int64_t slot) __attribute__((always_inline)) {
     const double t_s = static_cast<double>(sample) * dt_s;
-    const StokesVector& s_in = run.input.Next();
+    const int in_block = static_cast<int>(sample & (kInputBlock - 1));
+    if (in_block == 0) {
+      input_cursor =
+          run.input.BeginBlock(static_cast<int>(std::min(kInputBlock, total_samples_ - sample)));
+    }
+    const StokesVector s_in = run.input.Step(in_block, &input_cursor);
+    if (in_block == kInputBlock - 1 || sample + 1 == total_samples_) {
+      run.input.EndBlock(input_cursor);
+    }
     const Pose& applied = line.at(slot);
     const StokesVector s_out = ElementalOutput(axes, applied, s_in);
     if (run.TakesSample()) {

@@ -82,36 +82,62 @@ void RunStatistics::Flush() const {
   // In time order: lock tracking and the error window.
   double window_error_deg[kBatch], window_leak[kBatch], window_raw_leak[kBatch], window_t_s[kBatch];
   int window_count = 0;
+  // The usual batch of a locked run: already below the threshold, the window open, and every
+  // sample below the threshold. Nothing changes state but the rearming, and the whole batch is
+  // in the window: branch-free loops (they vectorize) instead of the sample-by-sample pass.
+  int above = 0, rearms = 0;  // integer ORs: reductions the compiler vectorizes
   for (int i = 0; i < count; ++i) {
-    const double t_s = pending_t_s_[i];
-    const bool below = error_rad[i] < lock_threshold_rad_;
-    if (below && !below_) {
-      below_since_s_ = t_s;
-      if (!first_lock_s_) first_lock_s_ = t_s;
-    } else if (!below && below_) {
-      ++threshold_crossings_;
-      if (armed_) {
-        ++excursions_;
-        armed_ = false;
+    above |= !(error_rad[i] < lock_threshold_rad_);
+    rearms |= error_rad[i] < rearm_rad_;
+  }
+  const bool steady = below_ && window_open_ && above == 0;
+  if (steady) {
+    armed_ = armed_ || rearms != 0;
+    window_end_s_ = pending_t_s_[count - 1];
+    for (int i = 0; i < count; ++i) {
+      window_t_s[i] = pending_t_s_[i];
+      window_error_deg[i] = error_rad[i] * kRadToDeg;
+      window_leak[i] = std::max(leak[i], kLeakFloor);
+      window_raw_leak[i] = leak[i];
+    }
+    window_count = count;
+  } else {
+    for (int i = 0; i < count; ++i) {
+      const double t_s = pending_t_s_[i];
+      const bool below = error_rad[i] < lock_threshold_rad_;
+      if (below && !below_) {
+        below_since_s_ = t_s;
+        if (!first_lock_s_) first_lock_s_ = t_s;
+      } else if (!below && below_) {
+        ++threshold_crossings_;
+        if (armed_) {
+          ++excursions_;
+          armed_ = false;
+        }
+      }
+      if (error_rad[i] < rearm_rad_) armed_ = true;
+      below_ = below;
+      if (!window_open_) {
+        window_open_ = fixed_start_s_ ? t_s >= *fixed_start_s_
+                                      : first_lock_s_.has_value() && t_s >= *first_lock_s_ + settle_s_;
+        if (window_open_) window_start_s_ = t_s;
+      }
+      if (window_open_) {
+        window_end_s_ = t_s;
+        window_t_s[window_count] = t_s;
+        window_error_deg[window_count] = error_rad[i] * kRadToDeg;
+        window_leak[window_count] = std::max(leak[i], kLeakFloor);
+        window_raw_leak[window_count] = leak[i];
+        ++window_count;
       }
     }
-    if (error_rad[i] < rearm_rad_) armed_ = true;
-    below_ = below;
-    if (!window_open_) {
-      window_open_ = fixed_start_s_ ? t_s >= *fixed_start_s_
-                                    : first_lock_s_.has_value() && t_s >= *first_lock_s_ + settle_s_;
-      if (window_open_) window_start_s_ = t_s;
-    }
-    if (window_open_) {
-      window_end_s_ = t_s;
-      window_t_s[window_count] = t_s;
-      window_error_deg[window_count] = error_rad[i] * kRadToDeg;
-      window_leak[window_count] = std::max(leak[i], kLeakFloor);
-      window_raw_leak[window_count] = leak[i];
-      ++window_count;
-    }
   }
+  // Both branches above fill the window arrays up to window_count; GCC 12 cannot see it
+  // through the steady branch's vectorized loop.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
   TrackRecovery(window_error_deg, window_t_s, window_count);
+#pragma GCC diagnostic pop
   leak_log_sum_.AddBatch(window_leak, window_count);
   // Blocked sum: plain within the batch (even and odd window samples in two registers; an
   // array indexed by parity would chain through memory), compensated across batches.

@@ -2,12 +2,16 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
+#include <functional>
+#include <string>
 #include <stdexcept>
 #include <utility>
 #include <vector>
 
 #include "dpc/disturbance/constant_rotation_disturbance.h"
+#include "dpc/disturbance/paper_scrambler.h"
 #include "dpc/disturbance/random_walk_disturbance.h"
 
 namespace dpc {
@@ -174,6 +178,72 @@ TEST_F(InputSopGeneratorTest, ABadDisturbanceIsNamedByItsIndex) {
     EXPECT_NE(std::string(error.what()).find("input.disturbances[1]"), std::string::npos)
         << error.what();
   }
+}
+
+// BeginBlock / Step / EndBlock against Next(), bit for bit, over blocks of uneven sizes (an empty
+// one, one of a single sample, full ones), from the first sample on.
+void ExpectBlocksEqualNext(const std::function<std::vector<std::unique_ptr<Disturbance>>()>& make,
+                           const std::string& what) {
+  SCOPED_TRACE(what);
+  const StokesVector initial = StokesVector(1, 2, 2).normalized();
+  InputSopGenerator one_by_one(initial, make(), 7, 50e6);
+  InputSopGenerator blocked(initial, make(), 7, 50e6);
+  const int sizes[] = {1, 0, 64, 5, 64, 33, 1, 64, 64, 17};
+  int64_t sample = 0;
+  for (int size : sizes) {
+    InputSopGenerator::BlockCursor cursor = blocked.BeginBlock(size);
+    for (int i = 0; i < size; ++i, ++sample) {
+      const StokesVector expected = one_by_one.Next();
+      const StokesVector got = blocked.Step(i, &cursor);
+      for (int c = 0; c < 3; ++c) {
+        ASSERT_EQ(std::bit_cast<uint64_t>(got[c]), std::bit_cast<uint64_t>(expected[c]))
+            << "sample " << sample << " component " << c;
+      }
+    }
+    blocked.EndBlock(cursor);
+    EXPECT_EQ(blocked.sample_index(), one_by_one.sample_index());
+  }
+  // Next() goes on from the blocks' last SOP.
+  for (int k = 0; k < 10; ++k) {
+    const StokesVector expected = one_by_one.Next();
+    EXPECT_EQ(blocked.Next(), expected);
+  }
+}
+
+TEST_F(InputSopGeneratorTest, BlocksGiveWhatNextGivesBitForBit) {
+  const auto scrambler = [](double rate_rad_per_s, double kick_ratio, Vector3 axis, Vector3 kick) {
+    return [=] {
+      std::vector<std::unique_ptr<Disturbance>> d;
+      d.push_back(std::make_unique<PaperScrambler>(rate_rad_per_s, kick_ratio, axis, kick, 50e6));
+      return d;
+    };
+  };
+  ExpectBlocksEqualNext(scrambler(1e5, 1.0, Vector3::UnitZ(), Vector3::UnitY()),
+                        "the paper's scrambler");
+  ExpectBlocksEqualNext(scrambler(1e5, 0.0, Vector3::UnitZ(), Vector3::UnitY()),
+                        "without kicks");
+  ExpectBlocksEqualNext(scrambler(2e5, 0.5, Vector3::UnitX(), Vector3::UnitZ()),
+                        "other elemental axes");
+  // Kicks of σ = 0.02 rad: beyond the small-angle series now and then (the library's sin/cos).
+  ExpectBlocksEqualNext(scrambler(1e5, 10.0, Vector3::UnitZ(), Vector3::UnitY()),
+                        "large kicks");
+  ExpectBlocksEqualNext(scrambler(1e5, 1.0, Vector3(1, 1, 0), Vector3::UnitY()),
+                        "a general rotation axis");
+  ExpectBlocksEqualNext(
+      [] {
+        std::vector<std::unique_ptr<Disturbance>> d;
+        d.push_back(std::make_unique<RandomWalkDisturbance>(1e3, 50e6));
+        d.push_back(std::make_unique<ConstantRotationDisturbance>(1e5, Vector3::UnitZ(), 50e6));
+        return d;
+      },
+      "other disturbances");
+}
+
+TEST_F(InputSopGeneratorTest, ABlockLargerThanTheMostIsRefused) {
+  InputSopGenerator generator(StokesVector::UnitX(), {}, kSeed, kSampleRateHz);
+  EXPECT_THROW(generator.BeginBlock(InputSopGenerator::kMaxBlock + 1), std::invalid_argument);
+  EXPECT_THROW(generator.BeginBlock(-1), std::invalid_argument);
+  EXPECT_EQ(generator.sample_index(), -1);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 
 namespace dpc {
 namespace {
@@ -176,6 +177,62 @@ TEST(RunStatisticsTest, BatchBoundariesDoNotChangeTheResult) {
   EXPECT_NEAR(s.error_deg.mean, sum_deg / counted, 1e-9);
   EXPECT_NEAR(s.phi_max[0], 0.001 * (n - 1), 1e-12);
   EXPECT_NEAR(s.phi_min[1], -0.002 * (n - 1), 1e-12);
+}
+
+// A long locked run whose batches are mostly quiet (every sample below the threshold: Flush's
+// steady path) with excursions, crossings without rearming, and a relock between them, against a
+// sample-by-sample reference of the rules in the header comment.
+TEST(RunStatisticsTest, QuietBatchesAndEventfulOnesFollowTheSameRules) {
+  constexpr double kThresholdDeg = 10.0;
+  RunStatistics stats(kTarget, 2, 0.0, kThresholdDeg, std::nullopt);
+  const int n = 12 * RunStatistics::kBatch + 5;
+  const auto error_deg_at = [](int k) {
+    if (k < 40) return 30.0;                       // before the first lock
+    const int in_batch = k % RunStatistics::kBatch, batch = k / RunStatistics::kBatch;
+    if (batch == 3 && in_batch >= 100 && in_batch < 120) return 12.0;  // an excursion
+    if (batch == 5 && in_batch >= 10 && in_batch < 20) return 11.0;    // an excursion, then
+    if (batch == 5 && in_batch >= 20 && in_batch < 60) return 7.0;     // not below half again:
+    if (batch == 5 && in_batch >= 60 && in_batch < 62) return 11.0;    // a crossing only
+    if (batch == 6 && in_batch >= 200 && in_batch < 210) return 12.0;  // an excursion; the
+    if (batch == 6 && in_batch >= 210) return 7.0;  // rearming comes with the quiet batch 7
+    if (batch == 8 && in_batch < 5) return 12.0;     // an excursion only if batch 7 rearmed
+    if (batch == 8 && in_batch >= 200) return 20.0;  // an excursion across a batch boundary
+    if (batch == 9 && in_batch < 30) return 20.0;
+    return 2.0 + 0.5 * std::sin(0.01 * k);         // locked, below half the threshold
+  };
+  // The reference.
+  bool below = false, armed = false;
+  std::optional<int> first_lock;
+  int below_since = -1, excursions = 0, crossings = 0, window = 0;
+  double sum_deg = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const double e = error_deg_at(k);
+    stats.AddSample(k * 1e-6, At(e * kDeg), Phi(0.001 * k, 0.0));
+    const bool now_below = e < kThresholdDeg;
+    if (now_below && !below) {
+      below_since = k;
+      if (!first_lock) first_lock = k;
+    } else if (!now_below && below) {
+      ++crossings;
+      if (armed) ++excursions, armed = false;
+    }
+    if (e < 0.5 * kThresholdDeg) armed = true;
+    below = now_below;
+    if (first_lock) ++window, sum_deg += e;
+  }
+  const RunSummary s = stats.Summarize(n, 0);
+  EXPECT_EQ(s.excursions, excursions);
+  EXPECT_EQ(excursions, 5);
+  EXPECT_EQ(s.threshold_crossings, crossings);
+  EXPECT_EQ(crossings, 6);
+  ASSERT_TRUE(s.first_lock_time_s.has_value());
+  EXPECT_NEAR(*s.first_lock_time_s, *first_lock * 1e-6, 1e-15);
+  ASSERT_TRUE(s.lock_time_s.has_value());
+  EXPECT_NEAR(*s.lock_time_s, below_since * 1e-6, 1e-15);
+  EXPECT_EQ(s.statistics_samples, window);
+  EXPECT_NEAR(s.statistics_end_s, (n - 1) * 1e-6, 1e-15);
+  EXPECT_NEAR(s.error_deg.mean, sum_deg / window, 1e-9);
+  EXPECT_NEAR(s.error_deg.max, 20.0, 1e-9);  // the 30° before the first lock are outside
 }
 
 TEST(RunStatisticsTest, UpdateCounters) {
