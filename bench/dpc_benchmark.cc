@@ -283,8 +283,6 @@ void BM_SimulatorBatch(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(samples), benchmark::Counter::kIsRate);
 }
 
-// A sweep as `dpc sweep` runs it (RunSweep: batches in the widest lanes, on every core): 4 seeds
-// per core and lane of the paper scenario; samples per second of wall time.
 // The simulator's statistics alone (RunStatistics::AddSample and its batched Flush), in samples
 // per second: a locked output wandering ~0.1° around the paper's target and `controls` slowly
 // drifting controls, as the paper scenario feeds them.
@@ -292,7 +290,7 @@ void BM_Statistics(benchmark::State& state) {
   const int controls = static_cast<int>(state.range(0));
   constexpr int kSamples = 1 << 16;
   std::mt19937_64 engine(7);
-  std::normal_distribution<double> normal(0.0, 1e-3);
+  std::normal_distribution<double> normal(0.0, 1e-3);  // rad, per component of S_out
   std::vector<StokesVector> outputs(kSamples);
   std::vector<double> phi(static_cast<size_t>(kSamples) * controls);
   double drift[8] = {0.3, -0.7, 1.1, 0.2, 0.5, -0.4, 0.9, 0.6};
@@ -300,7 +298,7 @@ void BM_Statistics(benchmark::State& state) {
     outputs[i] = (kPaperTarget.point() + StokesVector(normal(engine), normal(engine),
                                                       normal(engine))).normalized();
     for (int c = 0; c < controls; ++c) {
-      drift[c] += 1e-4 * normal(engine) * 1e3;
+      drift[c] += 0.1 * normal(engine);  // steps of 1e-4 RMS
       phi[static_cast<size_t>(i) * controls + c] = drift[c];
     }
   }
@@ -318,6 +316,8 @@ void BM_Statistics(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(samples), benchmark::Counter::kIsRate);
 }
 
+// A sweep as `dpc sweep` runs it (RunSweep: batches in the widest lanes, on every core): 4 seeds
+// per core and lane of the paper scenario; samples per second of wall time.
 void BM_Sweep(benchmark::State& state) {
   const int stages = static_cast<int>(state.range(0));
   const int threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));

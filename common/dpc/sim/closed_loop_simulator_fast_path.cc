@@ -56,6 +56,7 @@ SimulationResult ClosedLoopSimulator::RunFastPath(const Axes& axes, SimulationOb
   // polarimeters of `sample`, whose pose is in `slot`.
   // The input a block at a time: its random draws batched, its rotations interleaved here.
   constexpr int64_t kInputBlock = InputSopGenerator::kMaxBlock;
+  static_assert((kInputBlock & (kInputBlock - 1)) == 0, "sample & (kInputBlock - 1) is the index");
   InputSopGenerator::BlockCursor input_cursor{};
   const auto observe = [&](int64_t sample, int64_t slot) __attribute__((always_inline)) {
     const double t_s = static_cast<double>(sample) * dt_s;

@@ -81,25 +81,30 @@ void RunStatistics::Flush() const {
   }
   // In time order: lock tracking and the error window.
   double window_error_deg[kBatch], window_leak[kBatch], window_raw_leak[kBatch], window_t_s[kBatch];
+  // The window's times and raw leaks: the arrays above, or the batch's own when all of it is in.
+  const double* window_times_s = window_t_s;
+  const double* window_raw_leaks = window_raw_leak;
   int window_count = 0;
   // The usual batch of a locked run: already below the threshold, the window open, and every
   // sample below the threshold. Nothing changes state but the rearming, and the whole batch is
   // in the window: branch-free loops (they vectorize) instead of the sample-by-sample pass.
-  int above = 0, rearms = 0;  // integer ORs: reductions the compiler vectorizes
-  for (int i = 0; i < count; ++i) {
-    above |= !(error_rad[i] < lock_threshold_rad_);
-    rearms |= error_rad[i] < rearm_rad_;
+  int above = 1, rearms = 0;  // integer ORs: reductions the compiler vectorizes
+  if (below_ && window_open_) {
+    above = 0;
+    for (int i = 0; i < count; ++i) {
+      above |= !(error_rad[i] < lock_threshold_rad_);
+      rearms |= error_rad[i] < rearm_rad_;
+    }
   }
-  const bool steady = below_ && window_open_ && above == 0;
-  if (steady) {
+  if (above == 0) {
     armed_ = armed_ || rearms != 0;
     window_end_s_ = pending_t_s_[count - 1];
     for (int i = 0; i < count; ++i) {
-      window_t_s[i] = pending_t_s_[i];
       window_error_deg[i] = error_rad[i] * kRadToDeg;
       window_leak[i] = std::max(leak[i], kLeakFloor);
-      window_raw_leak[i] = leak[i];
     }
+    window_times_s = pending_t_s_;
+    window_raw_leaks = leak;
     window_count = count;
   } else {
     for (int i = 0; i < count; ++i) {
@@ -136,7 +141,7 @@ void RunStatistics::Flush() const {
   // through the steady branch's vectorized loop.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-  TrackRecovery(window_error_deg, window_t_s, window_count);
+  TrackRecovery(window_error_deg, window_times_s, window_count);
 #pragma GCC diagnostic pop
   leak_log_sum_.AddBatch(window_leak, window_count);
   // Blocked sum: plain within the batch (even and odd window samples in two registers; an
@@ -144,10 +149,10 @@ void RunStatistics::Flush() const {
   double even = 0.0, odd = 0.0;
   int w = 0;
   for (; w + 1 < window_count; w += 2) {
-    even += window_raw_leak[w];
-    odd += window_raw_leak[w + 1];
+    even += window_raw_leaks[w];
+    odd += window_raw_leaks[w + 1];
   }
-  if (w < window_count) even += window_raw_leak[w];
+  if (w < window_count) even += window_raw_leaks[w];
   CompensatedAdd(even + odd, &leak_sum_, &leak_compensation_);
   error_deg_.AddBatch(window_error_deg, window_count);
   // Controls: up to four histograms at once, more one at a time.
