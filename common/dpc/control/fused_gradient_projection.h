@@ -97,14 +97,10 @@ class FusedGradientProjection {
     }
   }
 
-  /// Real-time. Sets `pose` to the command pose->phi exactly (library sines and cosines).
+  /// Real-time. Sets `pose` to the command pose->phi exactly: the four stages' sines and cosines
+  /// at once (SinCos of lanes.h, within ~2 ulp of the library's).
   [[gnu::always_inline]] void ExactPose(Pose* pose) const {
-    for (int e = 0; e < 4; ++e) {
-      double sine, cosine;
-      SinCos(rad_per_unit_[e] * pose->phi[e] + offset_rad_[e], &sine, &cosine);
-      pose->sin[e] = sine;
-      pose->cos[e] = cosine;
-    }
+    SinCos(rad_per_unit_ * pose->phi + offset_rad_, &pose->sin, &pose->cos);
     pose->incremental_steps = 0;
   }
 
@@ -227,7 +223,7 @@ class FusedGradientProjection {
   Axes axes_;
   // Per lane; an idle lane (3 stages) has k = 0, θ0 = 0.
   Lanes rad_per_unit_ = {0.0, 0.0, 0.0, 0.0};
-  double offset_rad_[4] = {};
+  Lanes offset_rad_ = {0.0, 0.0, 0.0, 0.0};
   double step_, nullspace_step_;
   bool has_threshold_;
   double threshold_;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -42,6 +43,59 @@ TEST(LanesTest, SmallAngleSinCosFusedEqualsTheScalarSeriesInEveryLane) {
       ASSERT_EQ(s[i], scalar_s);
       ASSERT_EQ(c[i], scalar_c);
     }
+  }
+}
+
+// Units in the last place of `want` between it and `got` (the spacing of doubles at |want|).
+double UlpsFrom(double got, double want) {
+  const double spacing = std::nextafter(std::abs(want), INFINITY) - std::abs(want);
+  return std::abs(got - want) / spacing;
+}
+
+TEST(LanesTest, SinCosIsWithinTwoUlpOfTheLibrary) {
+  std::mt19937_64 rng(11);
+  double worst_ulp = 0.0, worst_abs = 0.0;
+  // Around zero, the pose's usual range, and out to the reduction's limit.
+  for (const double range : {1e-3, 1.0, 4.0, 40.0, 4e3, 0.99 * kLanesSinCosLimit}) {
+    std::uniform_real_distribution<double> x(-range, range);
+    for (int trial = 0; trial < 50000; ++trial) {
+      const Lanes angles = {x(rng), x(rng), x(rng), x(rng)};
+      Lanes s, c;
+      SinCos(angles, &s, &c);
+      for (int i = 0; i < 4; ++i) {
+        const double want_s = std::sin(angles[i]), want_c = std::cos(angles[i]);
+        worst_abs = std::max({worst_abs, std::abs(s[i] - want_s), std::abs(c[i] - want_c)});
+        // Relative to values not near a zero (there the absolute error is what counts).
+        if (std::abs(want_s) > 1e-3) worst_ulp = std::max(worst_ulp, UlpsFrom(s[i], want_s));
+        if (std::abs(want_c) > 1e-3) worst_ulp = std::max(worst_ulp, UlpsFrom(c[i], want_c));
+      }
+    }
+  }
+  EXPECT_LE(worst_ulp, 2.0);
+  EXPECT_LE(worst_abs, 2.3e-16);  // one ulp of 1
+  // Exact where the library is: zero, and the quadrant boundaries' signs.
+  Lanes s, c;
+  SinCos(Lanes{0.0, M_PI / 2, -M_PI / 2, M_PI}, &s, &c);
+  EXPECT_EQ(s[0], 0.0);
+  EXPECT_EQ(c[0], 1.0);
+  EXPECT_EQ(s[1], 1.0);
+  EXPECT_EQ(s[2], -1.0);
+  EXPECT_EQ(c[3], -1.0);
+  EXPECT_NEAR(c[1], std::cos(M_PI / 2), 1e-25);
+  EXPECT_NEAR(s[3], std::sin(M_PI), 1e-25);
+}
+
+TEST(LanesTest, SinCosBeyondTheReductionAndNonFiniteLanesTakeTheLibrary) {
+  const Lanes angles = {2.0 * kLanesSinCosLimit, -1e300, NAN, INFINITY};
+  Lanes s, c;
+  SinCos(angles, &s, &c);
+  EXPECT_EQ(s[0], std::sin(angles[0]));
+  EXPECT_EQ(c[0], std::cos(angles[0]));
+  EXPECT_EQ(s[1], std::sin(angles[1]));
+  EXPECT_EQ(c[1], std::cos(angles[1]));
+  for (int i = 2; i < 4; ++i) {
+    EXPECT_TRUE(std::isnan(s[i])) << i;
+    EXPECT_TRUE(std::isnan(c[i])) << i;
   }
 }
 
