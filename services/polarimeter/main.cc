@@ -157,7 +157,13 @@ class PolarimeterService final : public Service {
               bench_.scenario().target) {
     if (bench_.scenario().polarimeter_device) {
       instrument_ = std::make_unique<InstrumentPolarimeter>(*bench_.scenario().polarimeter_device);
-      spdlog::info("samples from {} ({} per sample)", instrument_->name(), instrument_->device().query);
+      const PolarimeterDeviceConfig& device = instrument_->device();
+      if (device.stream) {
+        spdlog::info("samples from {} (its stream, started by {})", instrument_->name(),
+                     device.stream_start.empty() ? std::string("the instrument itself") : device.stream_start);
+      } else {
+        spdlog::info("samples from {} ({} per sample)", instrument_->name(), device.query);
+      }
     }
     if (!options.trace_path.empty()) {
       std::vector<std::string> names;
