@@ -70,61 +70,54 @@ using Lanes = double __attribute__((vector_size(32)));
               Splat(1.0));
 }
 
+/// Beyond this |angle| SinCos takes the library: n·pio2_1 below is exact only for |n| < 2²⁰.
+inline constexpr double kLanesSinCosLimit = 1.6e6;  // < 2²⁰·π/2
+
 /// sin and cos of x lane by lane, within ~2 ulp of the library's (lanes_test measures it),
 /// without a call or a branch for |x| < kLanesSinCosLimit (a chain of ~16 ns from x to both on
-/// the development VM, where the library's sin alone takes about as long for one angle).
+/// the development VM, where the library's sin alone takes about as long for one angle); lanes
+/// beyond (or NaN, ±Inf) by the library.
 /// fdlibm's method (Sun Microsystems, 1993): x is reduced by the nearest multiple n of π/2,
 /// π/2 split as fdlibm's pio2_1 (33 bits, so that n·pio2_1 is exact for |n| < 2²⁰) + pio2_1t;
 /// then fdlibm's minimax kernels __kernel_sin and __kernel_cos (|error| < 2⁻⁵⁸ on
 /// [−π/4, π/4]), their polynomials evaluated in Estrin's scheme (a shorter dependency chain than
-/// Horner's), and the quadrant n mod 4 picks and signs the results.
-/// `fma(a, b, c)`: a·b + c, as the build's MulAdd rounds it (once with FMA, twice without), so
-/// that every caller with the same `fma` gets the same bits.
-/// V: a GCC vector of doubles (Lanes here; the batched simulator's lanes).
-inline constexpr double kLanesSinCosLimit = 1.6e6;  // < 2²⁰·π/2
-
-template <typename V, typename Fma>
-[[gnu::always_inline]] inline void ReducedSinCos(V x, V* s, V* c, Fma fma) {
-  using M = decltype(x < x);
-  const auto splat = [](double value) { return V{} + value; };
+/// Horner's) with MulAdd, and the quadrant n mod 4 picks and signs the results.
+[[gnu::always_inline]] inline void SinCos(Lanes x, Lanes* s, Lanes* c) {
+  using Mask = int64_t __attribute__((vector_size(32)));
   // n = nearest integer to x·2/π (|x·2/π| < 2⁵¹: adding 1.5·2⁵² rounds to an integer).
   constexpr double kRound = 0x1.8p52;
-  const V shifted = fma(x, splat(0x1.45f306dc9c883p-1), splat(kRound));  // 2/π
-  const V n = shifted - kRound;
-  const M quadrant = std::bit_cast<M>(shifted) & 3;  // n mod 4 (the mantissa's low bits)
+  const Lanes shifted = MulAdd(x, Splat(0x1.45f306dc9c883p-1), Splat(kRound));  // 2/π
+  const Lanes n = shifted - kRound;
+  const Mask quadrant = std::bit_cast<Mask>(shifted) & 3;  // n mod 4 (the mantissa's low bits)
   // y = x − n·π/2: the pio2_1 part is exact, the pio2_1t part rounds once more.
-  const V r = fma(-n, splat(0x1.921fb544p0), x);          // fdlibm pio2_1
-  const V y = fma(-n, splat(0x1.0b4611a626331p-34), r);   // fdlibm pio2_1t
+  const Lanes r = MulAdd(-n, Splat(0x1.921fb544p0), x);         // fdlibm pio2_1
+  const Lanes y = MulAdd(-n, Splat(0x1.0b4611a626331p-34), r);  // fdlibm pio2_1t
   // fdlibm's kernels on |y| ≤ π/4.
-  const V z = y * y;
-  const V z2 = z * z;
-  const V v = z * y;
-  const V s23 = fma(z, splat(-1.98412698298579493134e-04), splat(8.33333333332248946124e-03));
-  const V s45 = fma(z, splat(-2.50507602534068634195e-08), splat(2.75573137070700676789e-06));
-  const V s2_6 = fma(z2, fma(z2, splat(1.58969099521155010221e-10), s45), s23);
-  const V sine = fma(v, fma(z, s2_6, splat(-1.66666666666666324348e-01)), y);
-  const V z4 = z2 * z2;
-  const V c12 = fma(z, splat(-1.38888888888741095749e-03), splat(4.16666666666666019037e-02));
-  const V c34 = fma(z, splat(-2.75573143513906633035e-07), splat(2.48015872894767294178e-05));
-  const V c56 = fma(z, splat(-1.13596475577881948265e-11), splat(2.08757232129817482790e-09));
-  const V c1_6 = fma(z4, c56, fma(z2, c34, c12));
-  const V half_z = 0.5 * z;
-  const V w = 1.0 - half_z;
-  const V cosine = w + fma(z2, c1_6, (1.0 - w) - half_z);
+  const Lanes z = y * y;
+  const Lanes z2 = z * z;
+  const Lanes v = z * y;
+  const Lanes s23 = MulAdd(z, Splat(-1.98412698298579493134e-04), Splat(8.33333333332248946124e-03));
+  const Lanes s45 = MulAdd(z, Splat(-2.50507602534068634195e-08), Splat(2.75573137070700676789e-06));
+  const Lanes s2_6 = MulAdd(z2, MulAdd(z2, Splat(1.58969099521155010221e-10), s45), s23);
+  const Lanes sine = MulAdd(v, MulAdd(z, s2_6, Splat(-1.66666666666666324348e-01)), y);
+  const Lanes z4 = z2 * z2;
+  const Lanes c12 = MulAdd(z, Splat(-1.38888888888741095749e-03), Splat(4.16666666666666019037e-02));
+  const Lanes c34 = MulAdd(z, Splat(-2.75573143513906633035e-07), Splat(2.48015872894767294178e-05));
+  const Lanes c56 = MulAdd(z, Splat(-1.13596475577881948265e-11), Splat(2.08757232129817482790e-09));
+  const Lanes c1_6 = MulAdd(z4, c56, MulAdd(z2, c34, c12));
+  const Lanes half_z = 0.5 * z;
+  const Lanes w = 1.0 - half_z;
+  const Lanes cosine = w + MulAdd(z2, c1_6, (1.0 - w) - half_z);
   // Quadrant q: (sin, cos) = (s, c), (c, −s), (−s, −c), (−c, s).
-  const M odd = (quadrant & 1) != 0;
-  const M sine_negative = (quadrant & 2) != 0;
-  const M cosine_negative = ((quadrant + 1) & 2) != 0;
-  const M sign_bit = M{} | INT64_MIN;  // the sign bit alone
-  const M sin_bits = (odd & std::bit_cast<M>(cosine)) | (~odd & std::bit_cast<M>(sine));
-  const M cos_bits = (odd & std::bit_cast<M>(sine)) | (~odd & std::bit_cast<M>(cosine));
-  *s = std::bit_cast<V>(sin_bits ^ (sine_negative & sign_bit));
-  *c = std::bit_cast<V>(cos_bits ^ (cosine_negative & sign_bit));
-}
-
-/// ReducedSinCos for four angles; lanes outside ±kLanesSinCosLimit (or NaN) by the library.
-[[gnu::always_inline]] inline void SinCos(Lanes x, Lanes* s, Lanes* c) {
-  ReducedSinCos(x, s, c, [](Lanes a, Lanes b, Lanes d) { return MulAdd(a, b, d); });
+  const Mask odd = (quadrant & 1) != 0;
+  const Mask sine_negative = (quadrant & 2) != 0;
+  const Mask cosine_negative = ((quadrant + 1) & 2) != 0;
+  const Mask sign_bit = Mask{} | INT64_MIN;  // the sign bit alone
+  const Mask sin_bits = (odd & std::bit_cast<Mask>(cosine)) | (~odd & std::bit_cast<Mask>(sine));
+  const Mask cos_bits = (odd & std::bit_cast<Mask>(sine)) | (~odd & std::bit_cast<Mask>(cosine));
+  *s = std::bit_cast<Lanes>(sin_bits ^ (sine_negative & sign_bit));
+  *c = std::bit_cast<Lanes>(cos_bits ^ (cosine_negative & sign_bit));
+  // The library for lanes beyond the reduction's range.
   const auto inside = Abs(x) < kLanesSinCosLimit;
   if (__builtin_expect(!(inside[0] & inside[1] & inside[2] & inside[3]), 0)) {
     for (int e = 0; e < 4; ++e) {
