@@ -36,10 +36,15 @@ using nlohmann::json;
 
 class BenchInstrumentsTest : public BenchFixture {
  protected:
+  /// The emulator's true device: the scenario every test here starts it with.
+  static std::string EmulatorScenario() {
+    return std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/emulator_epc.pbtxt";
+  }
+
   /// Starts the emulator (its true device: deploy/scenarios/emulator_epc.pbtxt) and returns its
   /// start-up line: the ports and pseudo-terminals it serves.
   json StartEmulator(std::vector<std::string> args = {}) {
-    std::vector<std::string> argv = {DPC_EMULATOR_BINARY, std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/emulator_epc.pbtxt",
+    std::vector<std::string> argv = {DPC_EMULATOR_BINARY, EmulatorScenario(),
                                      "--tcp-port-epc", "0", "--tcp-port-polarimeter", "0", "--control-port", "0"};
     argv.insert(argv.end(), args.begin(), args.end());
     emulator_log_ = dir_ + "/emulator.log";
@@ -75,7 +80,7 @@ class BenchInstrumentsTest : public BenchFixture {
   /// The bench's scenario: the emulator's device as the bench believes it (the same maps), the
   /// default bench's controller, the two instruments.
   std::string BenchScenario(const InstrumentLinkConfig& epc, const InstrumentLinkConfig& polarimeter) {
-    ScenarioConfig scenario = LoadScenarioFile(std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/emulator_epc.pbtxt");
+    ScenarioConfig scenario = LoadScenarioFile(EmulatorScenario());
     scenario.controller.method = ControlMethod::kGradientProjection;
     scenario.controller.step = 0.5;
     scenario.controller.nullspace_step = 0.1;
@@ -98,7 +103,7 @@ class BenchInstrumentsTest : public BenchFixture {
     // a rotation of rate·T per sample lags by rate·T/step (20 rad/s, step 0.5: 4.6° at 500 Hz,
     // 5.7° at 400 Hz). Locked() asks for a median within 1.5 times that; a loop that has not
     // locked is tens of degrees off.
-    const ScenarioConfig truth = LoadScenarioFile(std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/emulator_epc.pbtxt");
+    const ScenarioConfig truth = LoadScenarioFile(EmulatorScenario());
     const double lag_rad = truth.input.disturbances.at(0).rate_rad_per_s / rate_hz /
                            LoadScenarioFile(scenario).controller.step;
     lock_threshold_deg_ = 1.5 * lag_rad * 180.0 / M_PI;
@@ -297,7 +302,7 @@ TEST_F(BenchInstrumentsTest, AStreamingPolarimeterPacesTheBenchAndItsStreamIsRes
 
 TEST_F(BenchInstrumentsTest, CalibrationRecoversTheNonlinearMapsAndTheBenchTracksWithThemAsWithTheTrueOnes) {
   const json ports = StartEmulator();
-  const ScenarioConfig truth = LoadScenarioFile(std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/emulator_epc.pbtxt");
+  const ScenarioConfig truth = LoadScenarioFile(EmulatorScenario());
   // What a lab starts from: the datasheet's linear map (0.6 rad/V), both SOPs measured.
   std::string nominal_path = BenchScenario(Tcp(ports["epc_tcp"]), Tcp(ports["polarimeter_tcp"]));
   ScenarioConfig nominal = LoadScenarioFile(nominal_path);
@@ -375,7 +380,7 @@ TEST_F(BenchInstrumentsTest, CalibrationAtSeveralTemperaturesInterpolatesTheMaps
   // 20 rad/s one reading's pairs once spread 0.0064 over 4 dwells of 0.12 s (a rotation needs
   // 0.02): the input hardly moved for half a second.
   const json ports = StartEmulator({"--rate-rad-per-s", "200"});
-  const ScenarioConfig truth = LoadScenarioFile(std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/emulator_epc.pbtxt");
+  const ScenarioConfig truth = LoadScenarioFile(EmulatorScenario());
   ScenarioConfig nominal = LoadScenarioFile(BenchScenario(Tcp(ports["epc_tcp"]), Tcp(ports["polarimeter_tcp"])));
   for (StageConfig& stage : nominal.stages) {
     stage.map = ControlMapConfig{};
