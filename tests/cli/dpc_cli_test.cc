@@ -118,6 +118,21 @@ TEST_F(DpcCliTest, ShippedTemperatureCalibrationRunsAtAnyCalibratedTemperatureOn
   EXPECT_NE(outside.err.find("(set by --operating-temperature-c)"), std::string::npos) << outside.err;
 }
 
+TEST_F(DpcCliTest, TheRangeCriterionKeepsAVoltDeviceInsideAndLockedAsTheDefaultDoes) {
+  // The emulator's device in volts (±10 V): with --range the null-space pull near the centre is
+  // the default's, so the loop tracks as well, and no command ever reaches an end.
+  const Result plain = Run("sim " + Scenario("emulator_epc") + " --duration-s 2 --json");
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  const Result ranged = Run("sim " + Scenario("emulator_epc") + " --duration-s 2 --range 10 --json");
+  ASSERT_EQ(ranged.exit_code, 0) << ranged.err;
+  const auto a = nlohmann::json::parse(plain.out), b = nlohmann::json::parse(ranged.out);
+  EXPECT_LT(b["error_deg"]["p99"].get<double>(), 1.2 * a["error_deg"]["p99"].get<double>()) << ranged.out;
+  EXPECT_LT(b["error_deg"]["max"].get<double>(), 2.0) << ranged.out;
+  EXPECT_EQ(b["clamped_updates"], 0) << ranged.out;
+  for (const auto& phi : b["phi_max"]) EXPECT_LT(phi.get<double>(), 9.0) << ranged.out;
+  for (const auto& phi : b["phi_min"]) EXPECT_GT(phi.get<double>(), -9.0) << ranged.out;
+}
+
 TEST_F(DpcCliTest, ThresholdedScenarioUsesTheNullSpaceOnlyPartOfTheTime) {
   const Result r = Run("sim " + Scenario("paper_fig5") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;

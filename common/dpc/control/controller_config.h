@@ -56,7 +56,7 @@ struct SingularityDampingConfig {
 /// scenario.proto NullspaceCriterion (gp, gpt).
 enum class NullspaceCriterion {
   kMinimumNorm,  ///< H = ½‖φ‖² (the paper)
-  kRange,        ///< H = Σ(x²/2 + x⁸/8) in range units, with saturate and re-solve
+  kRange,        ///< H = Σ h²(x²/2 + x⁸/8), x in range units, with saturate and re-solve
 };
 
 /// scenario.proto Prediction: delay compensation (delay_compensator.h). Model loop only.

@@ -89,7 +89,8 @@ void GradientProjectionLaw::RangeGradient(const ControlProblem& problem) {
     const double x = (phi[i] - 0.5 * (high + low)) / half;
     const double x2 = x * x;
     const double g = x + x * x2 * x2 * x2;
-    gradient_[i] = std::clamp(g, -kMaxRangeGradient, kMaxRangeGradient) / half;
+    // In φ's unit (h·x = φ − c): the pull near the centre is the paper's whatever the unit.
+    gradient_[i] = half * std::clamp(g, -kMaxRangeGradient, kMaxRangeGradient);
   }
 }
 

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "support/control_fixture.h"
 
 namespace dpc {
@@ -159,13 +161,13 @@ TEST_F(GradientProjectionDampingTest, AwayFromSingularitiesDampingChangesNothing
   EXPECT_GT(compared, 30);
 }
 
-// 4 stages R3R1R3R1 (light order S3, S1, S3, S1), each with range [−1, 1].
-WaveplateChain RangedChain(const std::string& axes, double limit) {
+// Stages of the given axes (light order), each with range [−limit, limit] and θ = rad_per_unit·φ.
+WaveplateChain RangedChain(const std::string& axes, double limit, double rad_per_unit = M_PI) {
   std::vector<WaveplateStage> stages;
   for (char c : axes) {
     const Vector3 axis = c == '1' ? Vector3::UnitX() : c == '2' ? Vector3::UnitY() : Vector3::UnitZ();
     stages.push_back(
-        WaveplateStage::FixedAxis(axis, ControlMap::Linear(M_PI), ControlRange{-limit, limit}));
+        WaveplateStage::FixedAxis(axis, ControlMap::Linear(rad_per_unit), ControlRange{-limit, limit}));
   }
   return WaveplateChain(std::move(stages));
 }
@@ -248,6 +250,51 @@ TEST(GradientProjectionRangeTest, SaturatesAtTheLimitAndSolvesTheTaskWithTheOthe
     EXPECT_LE(std::abs(next[i]), 0.3 + 1e-15) << i;
   }
   EXPECT_LT(target.DistanceRad(chain.Output(next, problem.s_in)), before);
+}
+
+TEST(GradientProjectionRangeTest, TheRangeCriterionDoesNotDependOnTheControlsUnit) {
+  // The same device in two units: φ in units of π rad with range ±1, and in "volts" with
+  // θ = (π/10)·V and range ±10 V. Every term of the law must scale with the unit (Δφ in volts =
+  // 10 × Δφ in units of π rad), as the paper's ½‖φ‖² does: a criterion whose gradient is in
+  // 1/unit would pull 100 times less in volts, and φ would drift to the ends of its range.
+  const Target target = Target::Point(StokesVector(0, 0.6, 0.8));
+  std::mt19937_64 random(7);
+  std::uniform_real_distribution<double> uniform(-0.9, 0.9);
+  for (const std::string axes : {"131", "3131"}) {
+    const WaveplateChain unit = RangedChain(axes, 1.0);
+    const WaveplateChain volts = RangedChain(axes, 10.0, M_PI / 10.0);
+    GradientProjectionOptions options;
+    options.range_aware = true;
+    GradientProjectionLaw unit_law(0.5, 0.1, options), volts_law(0.5, 0.1, options);
+    for (int trial = 0; trial < 50; ++trial) {
+      const int n = static_cast<int>(axes.size());
+      ControlVector phi(n);
+      for (int i = 0; i < n; ++i) phi[i] = uniform(random);
+      const StokesVector s_in =
+          StokesVector(uniform(random), uniform(random), uniform(random)).normalized();
+      ControlVector unit_delta, volts_delta;
+      for (const bool in_volts : {false, true}) {
+        const WaveplateChain& chain = in_volts ? volts : unit;
+        ControlProblem problem;
+        problem.chain = &chain;
+        problem.target = &target;
+        problem.need_jacobian = true;
+        ChainPose pose;
+        const ControlVector phi_here = in_volts ? ControlVector(10.0 * phi) : phi;
+        chain.ComputePose(phi_here, &pose);
+        problem.pose = &pose;
+        problem.s_in = s_in;
+        UpdateControlProblem(&problem);
+        GradientProjectionLaw& law = in_volts ? volts_law : unit_law;
+        ASSERT_TRUE(IsUsable(law.ComputeUpdate(problem, in_volts ? &volts_delta : &unit_delta)));
+      }
+      // Far from a singularity, where both solves are well conditioned.
+      if (unit_law.diagnostics().singular_values.min() < 0.2) continue;
+      EXPECT_LT((volts_delta - 10.0 * unit_delta).norm(), 1e-9 * (1.0 + volts_delta.norm()))
+          << axes << " trial " << trial << ": " << volts_delta.transpose() << " against 10 × "
+          << unit_delta.transpose();
+    }
+  }
 }
 
 TEST(GradientProjectionRangeTest, RejectsBadDampingSettings) {
