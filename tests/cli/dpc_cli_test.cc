@@ -133,6 +133,17 @@ TEST_F(DpcCliTest, TheRangeCriterionKeepsAVoltDeviceInsideAndLockedAsTheDefaultD
   for (const auto& phi : b["phi_min"]) EXPECT_GT(phi.get<double>(), -9.0) << ranged.out;
 }
 
+TEST_F(DpcCliTest, AThresholdTheRangesNeverLetTheControlsReachIsRefused) {
+  // paper_fig5: gpt with threshold 1; --range 1 keeps every |phi_i| <= 1.
+  const Result r = Run("sim " + Scenario("paper_fig5") + " --range 1");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("controller.threshold: gpt runs the null-space term only while some |phi_i| > 1"),
+            std::string::npos)
+      << r.err;
+  const Result wider = Run("sim " + Scenario("paper_fig5") + " --range 1.5 --duration-s 0.003");
+  EXPECT_EQ(wider.exit_code, 0) << wider.err;
+}
+
 TEST_F(DpcCliTest, ThresholdedScenarioUsesTheNullSpaceOnlyPartOfTheTime) {
   const Result r = Run("sim " + Scenario("paper_fig5") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -257,6 +258,36 @@ void ValidateScenario(const ScenarioConfig& scenario) {
       Fail("controller.nullspace_criterion",
            "RANGE keeps the controls inside their ranges, but no stage has a range; give "
            "stages[i].range (e.g. { min: -1 max: 1 })");
+    }
+  }
+  // Another: gpt runs the null-space term only while some |φ_i| exceeds its threshold. Every
+  // command is kept inside the ranges (the range criterion, or the integrator's clamp), so when
+  // every control has a range whose ends all lie within the threshold, the term never runs and
+  // the controls pile up at their ends.
+  if (scenario.controller.method == ControlMethod::kThresholdedGradientProjection) {
+    bool every_control_ranged = true;
+    double reach = 0.0;  // the largest |φ_i| any range lets a control take
+    const auto add = [&](const std::optional<ControlRange>& range) {
+      if (!range) {
+        every_control_ranged = false;
+        return;
+      }
+      reach = std::max({reach, std::abs(range->min), std::abs(range->max)});
+    };
+    for (const StageConfig& stage : scenario.stages) {
+      if (stage.kind == StageConfig::Kind::kFixedAxis) {
+        add(stage.range);
+      } else {
+        if (stage.retardance.controlled) add(stage.retardance.range);
+        if (stage.orientation.controlled) add(stage.orientation.range);
+      }
+    }
+    if (every_control_ranged && !(scenario.controller.threshold < reach)) {
+      Fail("controller.threshold",
+           fmt::format("gpt runs the null-space term only while some |phi_i| > {}, but every "
+                       "control is kept within its range, and no range reaches beyond |phi| = {}: "
+                       "the term would never run; give a threshold below {} (or use gp)",
+                       scenario.controller.threshold, reach, reach));
     }
   }
 }

@@ -140,6 +140,34 @@ TEST_F(ControllerValidationTest, RangeCriterionNeedsGradientProjectionAndRanges)
   EXPECT_EQ(ErrorLocation(), "controller.nullspace_criterion");
 }
 
+TEST_F(ControllerValidationTest, ThresholdedNullSpaceMustBeReachableInsideTheRanges) {
+  // gpt's null-space term runs only while some |phi_i| exceeds the threshold; with every control
+  // inside a range whose ends are within it, it never would.
+  scenario_.controller.method = ControlMethod::kThresholdedGradientProjection;
+  scenario_.controller.threshold = 1.0;
+  EXPECT_EQ(ErrorLocation(), "(valid)");  // no ranges: phi may exceed anything
+  for (StageConfig& stage : scenario_.stages) stage.range = ControlRange{-1.0, 1.0};
+  EXPECT_EQ(ErrorLocation(), "controller.threshold");
+  EXPECT_THAT(ErrorMessage(), HasSubstr("the term would never run; give a threshold below 1"));
+  scenario_.controller.nullspace_criterion = NullspaceCriterion::kRange;
+  EXPECT_EQ(ErrorLocation(), "controller.threshold");
+  scenario_.controller.threshold = 0.8;
+  EXPECT_EQ(ErrorLocation(), "(valid)");
+  // One control's range reaching beyond the threshold is enough ...
+  scenario_.controller.threshold = 1.0;
+  scenario_.stages[1].range = ControlRange{0.5, 1.5};
+  EXPECT_EQ(ErrorLocation(), "(valid)");
+  // ... and so is a control without a range.
+  scenario_.stages[1].range = ControlRange{-1.0, 1.0};
+  scenario_.stages[2].range.reset();
+  scenario_.controller.nullspace_criterion = NullspaceCriterion::kMinimumNorm;
+  EXPECT_EQ(ErrorLocation(), "(valid)");
+  // gp has no threshold.
+  for (StageConfig& stage : scenario_.stages) stage.range = ControlRange{-1.0, 1.0};
+  scenario_.controller.method = ControlMethod::kGradientProjection;
+  EXPECT_EQ(ErrorLocation(), "(valid)");
+}
+
 TEST_F(ControllerValidationTest, PredictionIsChecked) {
   scenario_.controller.prediction = PredictionConfig{};
   EXPECT_EQ(ErrorLocation(), "(valid)");
