@@ -30,6 +30,9 @@ std::string ControllerCore::OnDevice(const DeviceDescription& description) {
       target_config.kind = target_->is_point() ? TargetConfig::Kind::kPoint : TargetConfig::Kind::kSet;
     }
     ValidateControllerConfig(settings_.controller, controls, target_config, settings_.simulation);
+    // The driver's stages decide: a range criterion without a range (or a gpt threshold no
+    // range lets the controls reach) would run silently as something else.
+    ValidateControllerForStages(settings_.controller, stages);
     auto chain = std::make_unique<WaveplateChain>(BuildChain(stages));
     controller_.reset();
     chain_ = std::move(chain);

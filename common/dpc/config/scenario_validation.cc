@@ -238,19 +238,12 @@ int64_t TotalSamples(const SimulationConfig& simulation) {
 
 void ValidateTargetConfig(const TargetConfig& target) { ValidateTarget(target); }
 
-void ValidateScenario(const ScenarioConfig& scenario) {
-  ValidateSimulation(scenario.simulation);
-  ValidateDeviceStages(scenario.stages);
-  ValidateInput(scenario.input, scenario.simulation.sample_rate_hz);
-  ValidateTarget(scenario.target);
-  ValidateControllerConfig(scenario.controller, ScenarioControlCount(scenario.stages),
-                           scenario.target, scenario.simulation);
-  if (scenario.waveplate_device) ValidateWaveplateDevice(*scenario.waveplate_device, scenario.stages);
-  if (scenario.polarimeter_device) ValidatePolarimeterDevice(*scenario.polarimeter_device);
-  // A rule that spans parts: the range criterion needs a range to keep the controls in.
-  if (scenario.controller.nullspace_criterion == NullspaceCriterion::kRange) {
+void ValidateControllerForStages(const ControllerConfig& controller,
+                                 const std::vector<StageConfig>& stages) {
+  // The range criterion needs a range to keep the controls in.
+  if (controller.nullspace_criterion == NullspaceCriterion::kRange) {
     bool any_range = false;
-    for (const StageConfig& stage : scenario.stages) {
+    for (const StageConfig& stage : stages) {
       any_range = any_range || stage.range || (stage.retardance.controlled && stage.retardance.range) ||
                   (stage.orientation.controlled && stage.orientation.range);
     }
@@ -260,11 +253,11 @@ void ValidateScenario(const ScenarioConfig& scenario) {
            "stages[i].range (e.g. { min: -1 max: 1 })");
     }
   }
-  // Another: gpt runs the null-space term only while some |φ_i| exceeds its threshold. Every
+  // gpt runs the null-space term only while some |φ_i| exceeds its threshold. Every
   // command is kept inside the ranges (the range criterion, or the integrator's clamp), so when
   // every control has a range whose ends all lie within the threshold, the term never runs and
   // the controls pile up at their ends.
-  if (scenario.controller.method == ControlMethod::kThresholdedGradientProjection) {
+  if (controller.method == ControlMethod::kThresholdedGradientProjection) {
     bool every_control_ranged = true;
     double reach = 0.0;  // the largest |φ_i| any range lets a control take
     const auto add = [&](const std::optional<ControlRange>& range) {
@@ -274,7 +267,7 @@ void ValidateScenario(const ScenarioConfig& scenario) {
       }
       reach = std::max({reach, std::abs(range->min), std::abs(range->max)});
     };
-    for (const StageConfig& stage : scenario.stages) {
+    for (const StageConfig& stage : stages) {
       if (stage.kind == StageConfig::Kind::kFixedAxis) {
         add(stage.range);
       } else {
@@ -282,14 +275,26 @@ void ValidateScenario(const ScenarioConfig& scenario) {
         if (stage.orientation.controlled) add(stage.orientation.range);
       }
     }
-    if (every_control_ranged && !(scenario.controller.threshold < reach)) {
+    if (every_control_ranged && !(controller.threshold < reach)) {
       Fail("controller.threshold",
            fmt::format("gpt runs the null-space term only while some |phi_i| > {}, but every "
                        "control is kept within its range, and no range reaches beyond |phi| = {}: "
                        "the term would never run; give a threshold below {} (or use gp)",
-                       scenario.controller.threshold, reach, reach));
+                       controller.threshold, reach, reach));
     }
   }
+}
+
+void ValidateScenario(const ScenarioConfig& scenario) {
+  ValidateSimulation(scenario.simulation);
+  ValidateDeviceStages(scenario.stages);
+  ValidateInput(scenario.input, scenario.simulation.sample_rate_hz);
+  ValidateTarget(scenario.target);
+  ValidateControllerConfig(scenario.controller, ScenarioControlCount(scenario.stages),
+                           scenario.target, scenario.simulation);
+  if (scenario.waveplate_device) ValidateWaveplateDevice(*scenario.waveplate_device, scenario.stages);
+  if (scenario.polarimeter_device) ValidatePolarimeterDevice(*scenario.polarimeter_device);
+  ValidateControllerForStages(scenario.controller, scenario.stages);
 }
 
 }  // namespace dpc

@@ -92,6 +92,11 @@ void ValidateControllerConfig(const ControllerConfig& controller, int control_co
 /// The number of control signals the stages have: one per fixed-axis stage, one per controlled
 /// angle of an adjustable-axis stage.
 int ScenarioControlCount(const std::vector<StageConfig>& stages);
+/// The rules between the controller and the device's stages (a scenario's, or the driver's
+/// device description): the range criterion needs a range; gpt's threshold must lie within
+/// reach of some control (not every control ranged within it).
+void ValidateControllerForStages(const ControllerConfig& controller,
+                                 const std::vector<StageConfig>& stages);
 
 /// An instrument's command or reply line holds at most this many bytes.
 inline constexpr size_t kMaxInstrumentLineBytes = 200;

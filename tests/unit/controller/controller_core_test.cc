@@ -100,6 +100,32 @@ TEST_F(ControllerCoreTest, RefusesADeviceItsLawDoesNotFit) {
             std::string::npos);
 }
 
+TEST_F(ControllerCoreTest, RefusesADeviceWithoutTheRangesItsCriterionOrThresholdNeeds) {
+  // The controller's own scenario may have ranges (it was validated with them), but the
+  // driver's device decides: the range criterion on a device without ranges, or a gpt threshold
+  // that the device's ranges never let the controls reach, would run as something else.
+  ControllerSettings settings = Settings();
+  settings.controller.nullspace_criterion = NullspaceCriterion::kRange;
+  ControllerCore ranged(settings);
+  std::vector<StageConfig> stages = StagesFromAxes("131");
+  EXPECT_NE(ranged.OnDevice(Device(stages)).find("controller.nullspace_criterion: RANGE keeps the controls "
+                                                 "inside their ranges, but no stage has a range"),
+            std::string::npos);
+  EXPECT_FALSE(ranged.configured());
+  for (StageConfig& stage : stages) stage.range = ControlRange{-1.0, 1.0};
+  EXPECT_EQ(ranged.OnDevice(Device(stages)), "");
+
+  settings = Settings();
+  settings.controller.method = ControlMethod::kThresholdedGradientProjection;
+  settings.controller.threshold = 1.0;
+  ControllerCore thresholded(settings);
+  EXPECT_NE(thresholded.OnDevice(Device(stages)).find("controller.threshold: gpt runs the null-space term"),
+            std::string::npos);
+  EXPECT_NE(thresholded.TakeStatus(0, 0, 0).condition.find("unusable device description: controller.threshold"),
+            std::string::npos);
+  EXPECT_EQ(thresholded.OnDevice(Device(StagesFromAxes("131"))), "");
+}
+
 TEST_F(ControllerCoreTest, CountsAndReportsWhatTheEdgeRefusedWithoutTouchingItsPhi) {
   // (Which samples and states are malformed is bus::ReadSample / ReadState's business.)
   Configure();
