@@ -144,6 +144,16 @@ TEST_F(DpcCliTest, AThresholdTheRangesNeverLetTheControlsReachIsRefused) {
   EXPECT_EQ(wider.exit_code, 0) << wider.err;
 }
 
+TEST_F(DpcCliTest, AFlagTheLawDoesNotUseIsWarnedAbout) {
+  const Result r = Run("sim --method gp --threshold 0.5 --duration-s 0.003");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("dpc sim: warning: --threshold applies to gpt; method gp ignores it"), std::string::npos)
+      << r.err;
+  const Result used = Run("sim --method gpt --threshold 0.5 --duration-s 0.003");
+  EXPECT_EQ(used.exit_code, 0) << used.err;
+  EXPECT_EQ(used.err.find("warning"), std::string::npos) << used.err;
+}
+
 TEST_F(DpcCliTest, ThresholdedScenarioUsesTheNullSpaceOnlyPartOfTheTime) {
   const Result r = Run("sim " + Scenario("paper_fig5") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -233,7 +233,8 @@ cli::ExitCode RunSimCommand(const SimOptions& o) {
     fmt::print("{}", ScenarioToText(simulator->scenario()));
     return cli::ExitCode::kOk;
   }
-  const std::vector<std::string> warnings = ScenarioWarnings(simulator->scenario());
+  std::vector<std::string> warnings = o.overrides.IgnoredFlags(simulator->scenario());
+  for (std::string& w : ScenarioWarnings(simulator->scenario())) warnings.push_back(std::move(w));
   for (const auto& w : warnings) fmt::print(stderr, "dpc sim: warning: {}\n", w);
   if (!o.seeds.empty()) return RunSeeds(o, simulator->scenario(), warnings);
 

@@ -149,7 +149,9 @@ cli::ExitCode RunSweepCommand(const SweepOptions& o) {
                        text, device.empty() ? "scenario" : device, method, rate, seed);
             return cli::ExitCode::kInvalidInput;
           }
-          for (const std::string& warning : ScenarioWarnings(scenario)) {
+          std::vector<std::string> run_warnings = o.overrides.IgnoredFlags(scenario);
+          for (std::string& w : ScenarioWarnings(scenario)) run_warnings.push_back(std::move(w));
+          for (const std::string& warning : run_warnings) {
             if (std::find(warnings.begin(), warnings.end(), warning) == warnings.end()) {
               warnings.push_back(warning);
             }

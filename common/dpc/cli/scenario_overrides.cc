@@ -257,6 +257,27 @@ void ScenarioOverrides::Apply(ScenarioConfig* s) const {
   }
 }
 
+std::vector<std::string> ScenarioOverrides::IgnoredFlags(const ScenarioConfig& scenario) const {
+  const ControllerConfig& c = scenario.controller;
+  const std::string_view method = MethodName(c.method);
+  const bool gradient_projection = c.method == ControlMethod::kGradientProjection ||
+                                   c.method == ControlMethod::kThresholdedGradientProjection;
+  std::vector<std::string> ignored;
+  if (threshold && c.method != ControlMethod::kThresholdedGradientProjection) {
+    ignored.push_back(fmt::format("--threshold applies to gpt; method {} ignores it", method));
+  }
+  if (nullspace_step && !gradient_projection && c.method != ControlMethod::kExtendedJacobian) {
+    ignored.push_back(
+        fmt::format("--nullspace-step applies to gp, gpt and extended; method {} ignores it", method));
+  }
+  if (damping && !gradient_projection && c.method != ControlMethod::kDamped &&
+      c.method != ControlMethod::kRegularizedLeastSquares) {
+    ignored.push_back(
+        fmt::format("--damping applies to damped, rls, gp and gpt; method {} ignores it", method));
+  }
+  return ignored;
+}
+
 std::optional<std::string> ScenarioOverrides::FlagForField(const std::string& field_path) const {
   // A path names the flag's field or something inside it (e.g. stages[2].axis_vector).
   for (const auto& [field, flag] : field_to_flag_) {

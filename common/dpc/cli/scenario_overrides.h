@@ -65,6 +65,10 @@ struct ScenarioOverrides {
   /// stored (an unknown method or loop name, bad axes, --static with --rate-rad-per-s).
   void Apply(ScenarioConfig* scenario) const;
 
+  /// The flags given that the scenario's law does not use (e.g. --threshold with gp), one line
+  /// each, for the command to warn about: the run goes on, but not as the flag asked.
+  std::vector<std::string> IgnoredFlags(const ScenarioConfig& scenario) const;
+
   /// The flag that set the scenario field at `field_path` (e.g. "--step" for
   /// "controller.step"), if one did.
   std::optional<std::string> FlagForField(const std::string& field_path) const;

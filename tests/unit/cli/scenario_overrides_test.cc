@@ -73,6 +73,27 @@ TEST_F(ScenarioOverridesTest, NoFlagsLeaveTheScenarioAlone) {
   }
 }
 
+TEST_F(ScenarioOverridesTest, FlagsTheLawDoesNotUseAreNamed) {
+  // pinv has no threshold, no null space and no damping: each flag is named once.
+  Parse({"--method", "pinv", "--threshold", "0.7", "--nullspace-step", "0.05", "--damping", "0.01"});
+  overrides_.Apply(&scenario_);
+  const std::vector<std::string> ignored = overrides_.IgnoredFlags(scenario_);
+  ASSERT_EQ(ignored.size(), 3u);
+  EXPECT_EQ(ignored[0], "--threshold applies to gpt; method pinv ignores it");
+  EXPECT_EQ(ignored[1], "--nullspace-step applies to gp, gpt and extended; method pinv ignores it");
+  EXPECT_EQ(ignored[2], "--damping applies to damped, rls, gp and gpt; method pinv ignores it");
+  // gp uses the null-space step and the damping.
+  scenario_.controller.method = ControlMethod::kGradientProjection;
+  EXPECT_EQ(overrides_.IgnoredFlags(scenario_).size(), 1u);  // --threshold
+}
+
+TEST_F(ScenarioOverridesTest, FlagsTheLawUsesAreNotNamed) {
+  Parse({"--method", "gpt", "--threshold", "0.7", "--nullspace-step", "0.05", "--damping", "0.1",
+         "--damping-threshold", "0.3"});
+  overrides_.Apply(&scenario_);
+  EXPECT_TRUE(overrides_.IgnoredFlags(scenario_).empty());
+}
+
 TEST_F(ScenarioOverridesTest, EveryFlagSetsItsField) {
   Parse({"--method", "pinv", "--step", "0.3", "--nullspace-step", "0.05", "--threshold", "0.7",
          "--damping", "0.01", "--loop", "measured", "--activation-s", "1e-4", "--duration-s",
