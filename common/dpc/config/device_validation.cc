@@ -218,6 +218,22 @@ int ScenarioControlCount(const std::vector<StageConfig>& stages) {
   return count;
 }
 
+void CollectRanges(const std::vector<StageConfig>& stages,
+                   std::vector<std::pair<std::string, const std::optional<ControlRange>*>>* out) {
+  for (size_t i = 0; i < stages.size(); ++i) {
+    const StageConfig& stage = stages[i];
+    const std::string p = fmt::format("stages[{}]", i);
+    if (stage.kind == StageConfig::Kind::kFixedAxis) {
+      out->emplace_back(p + ".range", &stage.range);
+    } else {
+      if (stage.retardance.controlled) out->emplace_back(p + ".adjustable_axis.retardance.range", &stage.retardance.range);
+      if (stage.orientation.controlled) {
+        out->emplace_back(p + ".adjustable_axis.orientation.range", &stage.orientation.range);
+      }
+    }
+  }
+}
+
 void ValidateDeviceStages(const std::vector<StageConfig>& stages) { ValidateStages(stages); }
 
 }  // namespace dpc

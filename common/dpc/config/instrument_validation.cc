@@ -64,23 +64,6 @@ void ValidateLink(const InstrumentLinkConfig& link, const std::string& path) {
   }
 }
 
-/// Each controlled angle's range, in control order, with its path.
-void CollectRanges(const std::vector<StageConfig>& stages,
-                   std::vector<std::pair<std::string, const std::optional<ControlRange>*>>* out) {
-  for (size_t i = 0; i < stages.size(); ++i) {
-    const StageConfig& stage = stages[i];
-    const std::string p = fmt::format("stages[{}]", i);
-    if (stage.kind == StageConfig::Kind::kFixedAxis) {
-      out->emplace_back(p + ".range", &stage.range);
-    } else {
-      if (stage.retardance.controlled) out->emplace_back(p + ".adjustable_axis.retardance.range", &stage.retardance.range);
-      if (stage.orientation.controlled) {
-        out->emplace_back(p + ".adjustable_axis.orientation.range", &stage.orientation.range);
-      }
-    }
-  }
-}
-
 }  // namespace
 
 std::string FormatSetCommand(const std::string& set_command, int channel, double volts, int64_t code) {

@@ -258,22 +258,16 @@ void ValidateControllerForStages(const ControllerConfig& controller,
   // every control has a range whose ends all lie within the threshold, the term never runs and
   // the controls pile up at their ends.
   if (controller.method == ControlMethod::kThresholdedGradientProjection) {
+    std::vector<std::pair<std::string, const std::optional<ControlRange>*>> ranges;
+    CollectRanges(stages, &ranges);
     bool every_control_ranged = true;
     double reach = 0.0;  // the largest |φ_i| any range lets a control take
-    const auto add = [&](const std::optional<ControlRange>& range) {
-      if (!range) {
+    for (const auto& [path, range] : ranges) {
+      if (!*range) {
         every_control_ranged = false;
-        return;
+        break;
       }
-      reach = std::max({reach, std::abs(range->min), std::abs(range->max)});
-    };
-    for (const StageConfig& stage : stages) {
-      if (stage.kind == StageConfig::Kind::kFixedAxis) {
-        add(stage.range);
-      } else {
-        if (stage.retardance.controlled) add(stage.retardance.range);
-        if (stage.orientation.controlled) add(stage.orientation.range);
-      }
+      reach = std::max({reach, std::abs((*range)->min), std::abs((*range)->max)});
     }
     if (every_control_ranged && !(controller.threshold < reach)) {
       Fail("controller.threshold",

@@ -50,6 +50,9 @@
 //                0 ≤ horizon_samples, lead_samples ≤ 1e9.
 
 #include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "dpc/config/scenario_config.h"
@@ -92,6 +95,9 @@ void ValidateControllerConfig(const ControllerConfig& controller, int control_co
 /// The number of control signals the stages have: one per fixed-axis stage, one per controlled
 /// angle of an adjustable-axis stage.
 int ScenarioControlCount(const std::vector<StageConfig>& stages);
+/// Each control's range (set or not), in control order, with its field path.
+void CollectRanges(const std::vector<StageConfig>& stages,
+                   std::vector<std::pair<std::string, const std::optional<ControlRange>*>>* out);
 /// The rules between the controller and the device's stages (a scenario's, or the driver's
 /// device description): the range criterion needs a range; gpt's threshold must lie within
 /// reach of some control (not every control ranged within it).

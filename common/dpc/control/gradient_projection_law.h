@@ -23,9 +23,10 @@
 //       H = Σ_i h_i²(x_i²/2 + x_i⁸/8),   ∂H/∂φ_i = h_i·clip(x_i + x_i⁷, ±kMaxRangeGradient)
 //   (½φ² for a control without a range): the paper's ½‖φ‖² near the centre (∂H/∂φ_i ≈ φ_i − c_i,
 //   in the controls' own unit, so μ_N means the same with and without the criterion whether φ
-//   is in units of π rad or in volts), pushing harder towards the inside near an end. Then saturate and re-solve: if φ + Δφ leaves a
-//   range, that control is fixed at its limit (Δφ_i = limit − φ_i) and the task is solved again
-//   with the other controls only, the fixed ones' contribution moved to the task side,
+//   is in units of π rad or in volts), pushing harder towards the inside near an end.
+//   Then saturate and re-solve: if φ + Δφ leaves a range, that control is fixed at its limit
+//   (Δφ_i = limit − φ_i) and the task is solved again with the other controls only, the fixed
+//   ones' contribution moved to the task side,
 //       Δφ_F = μ J_F⁺(e − J_S Δφ_S/μ) − μ_N (I − J_F⁺J_F) ∇H_F,
 //   repeated while another control would leave its range (at most n times). The re-solve is
 //   always damped (with λ0, ε, or the defaults when damping is off): with one control fixed, a
