@@ -56,7 +56,8 @@ InputSopGenerator::BlockCursor InputSopGenerator::BeginBlock(int count) {
   if (!kicks) return cursor;
   // PaperScrambler::Advance's kick: SinCos(σ·normal), one draw per advanced sample.
   double angle_rad[kMaxBlock];
-  for (int i = block_first_; i < count; ++i) angle_rad[i] = sigma_rad * random_.Normal();
+  if (count > block_first_) random_.NormalBlock(angle_rad + block_first_, count - block_first_);
+  for (int i = block_first_; i < count; ++i) angle_rad[i] *= sigma_rad;
   int beyond = 0;  // an integer OR: a reduction the compiler vectorizes
   for (int i = block_first_; i < count; ++i) {
     beyond |= !(angle_rad[i] > -kSmallAngleLimit && angle_rad[i] < kSmallAngleLimit);

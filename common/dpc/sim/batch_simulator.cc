@@ -288,9 +288,13 @@ std::vector<SimulationResult> RunBatchFor(std::span<const ClosedLoopSimulator* c
         }
         if (!(lanes.input_kick_sigma[l] > 0.0)) continue;
         RandomSource& random = batch.lanes[static_cast<size_t>(l)]->run.input.random_source();
+        double draws[kBatchBlock];
+        draws[0] = 0.0;
+        const int first = k == 0 ? 1 : 0;
+        if (count > first) random.NormalBlock(draws + first, count - first);
         for (int i = 0; i < count; ++i) {
           buffers->normals[static_cast<size_t>(i) * kMaxBatchLanes + static_cast<size_t>(l)] =
-              k + i > 0 ? random.Normal() : 0.0;
+              draws[i];
         }
       }
     }
