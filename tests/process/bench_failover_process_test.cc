@@ -74,7 +74,7 @@ TEST_F(BenchFailoverTest, HigherPriorityControllerTakesOverWithoutAJump) {
 struct Failover {
   double gap_ms = 0.0;        ///< from the killed controller's last applied command to the standby's first
   double switch_step = 0.0;   ///< |Δφ| between those two applied states
-  double before_deg = 0.0;    ///< the largest output error in the 200 ms before the kill
+  double before_deg = 0.0;    ///< the largest output error in the 1 s before the kill
   double after_deg = 0.0;     ///< ... in the 100 ms after the switch
   std::string during;         ///< what the driver said in between (modes, reasons, samples)
 };
@@ -88,7 +88,8 @@ TEST_F(BenchFailoverTest, KillNineOfTheObeyedControllerHandsControlToTheStandby)
   // Kills the obeyed controller `primary` (started here) and measures the failover to the standby.
   const auto kill_and_measure = [&](const std::string& primary_id) -> std::optional<Failover> {
     Process& primary = StartController(primary_id, 10);
-    if (!Eventually([&] { return AppliedBy(primary_id) > 2000; }, 20s)) return std::nullopt;
+    // Obeyed for ≥ 1.4 s at 5 kHz: the reference window below (1 s) starts after its takeover.
+    if (!Eventually([&] { return AppliedBy(primary_id) > 7000; }, 20s)) return std::nullopt;
     primary.Signal(SIGKILL);
     const size_t standby_before = AppliedBy("standby");  // a loaded machine may have switched briefly
     if (!Eventually([&] { return AppliedBy("standby") > standby_before + 500; }, 10s)) return std::nullopt;
@@ -100,7 +101,10 @@ TEST_F(BenchFailoverTest, KillNineOfTheObeyedControllerHandsControlToTheStandby)
     const int64_t last_primary_ns = h->last_from_ns, first_standby_ns = h->first_to_ns;
     f.switch_step = MaxAbsDifference(states[last_primary].state.phi_applied(), states[first_standby].state.phi_applied());
     f.gap_ms = static_cast<double>(first_standby_ns - last_primary_ns) * 1e-6;
-    f.before_deg = MaxErrorDeg(last_primary_ns - 200'000'000, last_primary_ns);
+    // The steady state's largest error: over a second, which holds the machine's own stalls (the
+    // largest error of each 100 ms of a steady second ranged 1.5–14° on an idle 2-core VM; with
+    // 200 ms, a run under ctest -j2 failed at 9.72° after the switch against a limit of 8.89°).
+    f.before_deg = MaxErrorDeg(last_primary_ns - 1'000'000'000, last_primary_ns);
     f.after_deg = MaxErrorDeg(first_standby_ns, first_standby_ns + 100'000'000);
     // In between: every reason the driver gave (with how often), the samples answered, and how
     // many samples the bench published (few: the whole machine stalled, not the arbiter).
@@ -147,7 +151,7 @@ TEST_F(BenchFailoverTest, KillNineOfTheObeyedControllerHandsControlToTheStandby)
   // in φ is not a good measure: the input keeps turning during the gap, and a starved primary
   // may have lagged, so the standby's first command legitimately corrects that.) A standby that
   // continued from a φ of its own jumped by 0.24 to 0.96 in φ, tens of degrees at the output.
-  std::printf("largest output error: %.2f° in the 200 ms before the kill, %.2f° in the 100 ms after the switch\n",
+  std::printf("largest output error: %.2f° in the 1 s before the kill, %.2f° in the 100 ms after the switch\n",
               f->before_deg, f->after_deg);
   // While nobody commands (the gap, and any stall of the machine right after the kill), the
   // driver holds φ and the input keeps turning at the scrambler's rate (20 rad/s in the embedded
