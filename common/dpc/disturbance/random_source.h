@@ -3,9 +3,9 @@
 // normal and uniform variates and uniform directions.
 //
 // Engine: MT19937-64 (Mt19937_64 below: boost::random::mt19937_64's outputs). Normal variates:
-// boost::random::normal_distribution (a ziggurat). The engine seed is derived from (seed, stream) with SplitMix64
-// (Steele, Lea, Flood, OOPSLA 2014), so that the streams of one seed are independent and a run
-// is reproducible from the scenario seed alone:
+// boost::random::normal_distribution (a ziggurat). The engine seed is derived from (seed,
+// stream) with SplitMix64 (Steele, Lea, Flood, OOPSLA 2014), so that the streams of one seed
+// are independent and a run is reproducible from the scenario seed alone:
 //
 //   Mix64(z)  = SplitMix64's output function: z ← (z ⊕ z≫30)·0xbf58476d1ce4e5b9,
 //               z ← (z ⊕ z≫27)·0x94d049bb133111eb, z ⊕ z≫31
@@ -19,7 +19,6 @@
 //
 // Same (seed, stream) → the same sequence on every run. Not thread-safe: one owner per source.
 
-#include <boost/random/mersenne_twister.hpp>
 #include <boost/random/normal_distribution.hpp>
 #include <cmath>
 #include <cstdint>
