@@ -11,9 +11,11 @@
 //
 // Per update, the general path's equations (control_problem.h, task_pseudo_inverse.h,
 // gradient_projection_law.h, control_integrator.h, WaveplateChain::ComputePoseFrom):
-//   kinematics  one forward pass: M and each stage's axis in the input frame, Ω′_e = k_e·B_(e−1)ᵀa_e
-//   task        T = [e2ᵀΩ′; −e1ᵀΩ′] at the tangent basis (e1, e2) of the measured S_in,
-//               e = Eᵀ(MᵀS* − S_in) (model loop) or EᵀMᵀ(S* − S_out measured)
+//   kinematics  each stage's axis in the input frame, Ω′_e = k_e·B_(e−1)ᵀa_e (B_e = M_e⋯M_1),
+//               seen through the tangent basis (e1, e2) of the measured S_in
+//   task        T = [e2ᵀΩ′; −e1ᵀΩ′], e = Eᵀ(MᵀS* − S_in) (model loop) or EᵀMᵀ(S* − S_out
+//               measured); both by ElementalTask (optics/elemental_chain.h), which turns e1 and
+//               e2 through the stages instead of forming M
 //   law         Δφ = Tᵀ·adj(G)·(μe + μ_N·Tφ)/det G − μ_N·φ, G = TTᵀ, while det G > 1e-6·tr²G;
 //               near a singularity the general one-sided Jacobi TaskPseudoInverse
 //   integrator  φ ← φ + Δφ unless Δφ is not finite
@@ -22,15 +24,19 @@
 //               larger step
 //
 // What makes it fast: the update is a dependency chain from one command to the next (pose →
-// forward pass → T → G → det G → 1/det G → Δφ → pose), so its length, not the arithmetic,
-// sets the time. Ordered for it: the basis, the target and φ's projections wait off the chain;
-// G accumulates as each stage's row arrives (the last stage's is the latest); adj(G)·r is formed
-// while the division runs, so 1/det G is followed by one fused multiply-add to reach δ; the
-// series and the angle addition use fused multiply-adds (MulAdd, rotation.h). Everything stays
-// in registers (no arrays indexed at run time, no address of the pose taken); the rare cases
-// (near-singular task, a non-finite Δφ, an exact re-evaluation) leave the straight path through
-// one predicted branch each. Only round-off separates it from the general path (tests compare
-// the two).
+// turned basis → T → G → det G → 1/det G → Δφ → pose), and it is also heavy in multiplications,
+// so both its length and its operation count set the time. Ordered for it: the basis, the target
+// turned back through the last stage (w = M_mᵀS*) and φ's projections wait off the chain; the
+// basis turns through m − 1 stages (two vectors, not M's three columns through m); G
+// accumulates as each stage's row arrives (the last stage's is the latest); Tᵀ·adj(G) is formed
+// from T and G while the task error is still on its way, so the error reaches v =
+// Tᵀ·adj(G)·(μe + μ_N·Tφ) in one product and one sum, and 1/det G is followed by one fused
+// multiply-add to reach δ; the new pose's series runs in x⁴ beside the pairs of terms, with δ
+// multiplied into the old sine and cosine meanwhile (SmallAngleTurn, rotation.h). Everything
+// stays in registers (no arrays indexed at run time, no address of the pose taken); the rare
+// cases (near-singular task, a non-finite Δφ, an exact re-evaluation) leave the straight path
+// through one predicted branch each. Only round-off separates it from the general path (tests
+// compare the two).
 
 #include <algorithm>
 #include <cmath>
@@ -113,43 +119,41 @@ class FusedGradientProjection {
     FusedUpdateResult result;
     Vector3 e1, e2;
     TangentBasis(s_in, &e1, &e2);
-    // Kinematics and task rows, stage by stage; G and Tφ accumulate as the rows arrive.
-    const Lanes phi = pose->phi;
-    double m[3][3];
-    Lanes t0 = {0.0, 0.0, 0.0, 0.0}, t1 = t0;
-    double g11 = 0.0, g22 = 0.0, g12 = 0.0, z0 = 0.0, z1 = 0.0;
-    ElementalForwardPass(axes_, pose->cos, pose->sin, m, [&](auto stage, const auto& axis) {
-      constexpr int e = stage();
-      const double k = rad_per_unit_[e];
-      const double row0 = axis.Dot(k * e2[0], k * e2[1], k * e2[2]);
-      const double row1 = axis.Dot(-k * e1[0], -k * e1[1], -k * e1[2]);
-      t0[e] = row0;
-      t1[e] = row1;
-      if constexpr (e == 0) {
-        g11 = row0 * row0, g22 = row1 * row1, g12 = row0 * row1;
-        z0 = row0 * phi[e], z1 = row1 * phi[e];
-      } else {
-        g11 = MulAdd(row0, row0, g11), g22 = MulAdd(row1, row1, g22);
-        g12 = MulAdd(row0, row1, g12);
-        z0 = MulAdd(row0, phi[e], z0), z1 = MulAdd(row1, phi[e], z1);
-      }
-    });
-    // Task error e = Eᵀ(MᵀS* − MᵀS_out); MᵀS_out is S_in itself for the model output.
-    double ex, ey, ez;
+    // The target as the last stage sees it, turned back through that stage alone: M_mᵀS*
+    // (or M_mᵀ(S* − S_out) in the measured loop), from the command's pose, off the chain.
+    double wx, wy, wz;
     if (measured_) {
-      const double dx = target_[0] - s_out_measured[0], dy = target_[1] - s_out_measured[1],
-                   dz = target_[2] - s_out_measured[2];
-      ex = m[0][0] * dx + m[1][0] * dy + m[2][0] * dz;
-      ey = m[0][1] * dx + m[1][1] * dy + m[2][1] * dz;
-      ez = m[0][2] * dx + m[1][2] * dy + m[2][2] * dz;
+      wx = target_[0] - s_out_measured[0], wy = target_[1] - s_out_measured[1],
+      wz = target_[2] - s_out_measured[2];
     } else {
-      const double px = target_[0], py = target_[1], pz = target_[2];
-      ex = m[0][0] * px + m[1][0] * py + m[2][0] * pz - s_in[0];
-      ey = m[0][1] * px + m[1][1] * py + m[2][1] * pz - s_in[1];
-      ez = m[0][2] * px + m[1][2] * py + m[2][2] * pz - s_in[2];
+      wx = target_[0], wy = target_[1], wz = target_[2];
     }
-    const double error0 = e1[0] * ex + e1[1] * ey + e1[2] * ez;
-    const double error1 = e2[0] * ex + e2[1] * ey + e2[2] * ez;
+    RotateElemental(axes_.At(kStages - 1), pose->cos[kStages - 1], -pose->sin[kStages - 1], wx,
+                    wy, wz);
+    // e1·S_in, e2·S_in of the model loop's e = Eᵀ(MᵀS* − S_in): 0 up to rounding for a unit
+    // S_in, kept so that a measured S_in off the sphere gives the general path's error.
+    const double in0 = measured_ ? 0.0 : e1[0] * s_in[0] + e1[1] * s_in[1] + e1[2] * s_in[2];
+    const double in1 = measured_ ? 0.0 : e2[0] * s_in[0] + e2[1] * s_in[1] + e2[2] * s_in[2];
+    // Kinematics, task rows and task error (ElementalTask); G and Tφ accumulate as the rows
+    // arrive.
+    const Lanes phi = pose->phi;
+    const double basis1[3] = {e1[0], e1[1], e1[2]}, basis2[3] = {e2[0], e2[1], e2[2]};
+    double rows0[4] = {}, rows1[4] = {};
+    TaskGram<double> gram;
+    double error0, error1;
+    ElementalTask(
+        axes_, pose->cos, pose->sin, rad_per_unit_, basis1, basis2, wx, wy, wz, in0, in1,
+        [&](auto stage, double row0, double row1) {
+          constexpr int e = stage();
+          rows0[e] = row0;
+          rows1[e] = row1;
+          gram.Add(e == 0, row0, row1, phi[e],
+                   [](double a, double b, double c) { return MulAdd(a, b, c); });
+        },
+        &error0, &error1);
+    const double g11 = gram.g11, g22 = gram.g22, g12 = gram.g12, z0 = gram.z0, z1 = gram.z1;
+    const Lanes t0 = {rows0[0], rows0[1], rows0[2], rows0[3]};
+    const Lanes t1 = {rows1[0], rows1[1], rows1[2], rows1[3]};
     // Law: the null-space term (gpt: while some |φ_i| > threshold).
     double mu_null = nullspace_step_;
     if (has_threshold_ && !(MaxLane(Abs(phi)) > threshold_)) mu_null = 0.0;
@@ -158,10 +162,12 @@ class FusedGradientProjection {
     Lanes delta, dtheta;
     if (__builtin_expect(det > kWellConditioned * trace * trace, 1)) {
       const double inverse_det = 1.0 / det;
-      // adj(G)·(μe + μ_N·Tφ) while the division runs; then one multiply-add per control.
+      // Tᵀ·adj(G) from the rows and G while the task error is still on its way; then
+      // v = Tᵀ·adj(G)·(μe + μ_N·Tφ) is one product and one sum after it, and Δφ one multiply-add
+      // after the division.
+      const Lanes p0 = t0 * g22 - t1 * g12, p1 = t1 * g11 - t0 * g12;
       const double r0 = step_ * error0 + mu_null * z0, r1 = step_ * error1 + mu_null * z1;
-      const double u0 = g22 * r0 - g12 * r1, u1 = g11 * r1 - g12 * r0;
-      const Lanes v = t0 * u0 + t1 * u1;
+      const Lanes v = p0 * r0 + p1 * r1;
       const Lanes inverse = Splat(inverse_det);
       delta = MulAdd(v, inverse, -mu_null * phi);
       dtheta = MulAdd(rad_per_unit_ * v, inverse, -(mu_null * rad_per_unit_) * phi);
@@ -172,10 +178,10 @@ class FusedGradientProjection {
       dtheta = rad_per_unit_ * delta;
     }
     // The new command and its pose, kept only if Δφ is finite and the steps are small.
-    Lanes sd, cd;
-    SmallAngleSinCosFused(dtheta, &sd, &cd);
-    const Lanes cos_next = MulAdd(pose->cos, cd, -(pose->sin * sd));
-    const Lanes sin_next = MulAdd(pose->sin, cd, pose->cos * sd);
+    Lanes cos_next, sin_next;
+    SmallAngleTurn(
+        pose->cos, pose->sin, dtheta, [](Lanes a, Lanes b, Lanes c) { return MulAdd(a, b, c); },
+        &cos_next, &sin_next);
     result.applied = SumLanes(0.0 * delta) == 0.0;  // 0·x is NaN for NaN and ±Inf
     const bool small = MaxLane(Abs(dtheta)) < kSmallAngleLimit;
     const bool incremental =

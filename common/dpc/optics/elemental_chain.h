@@ -1,27 +1,25 @@
 #pragma once
 // Chains of 3 or 4 fixed-axis stages on S1, S2, S3 — the paper's devices — as fixed-size code:
-// the kinematics of the fused control update (control/fused_gradient_projection.h) and of the
-// simulator's fast path.
+// the kinematics of the fused control update (control/fused_gradient_projection.h), of the
+// batched simulator's kernel (sim/batch_kernel_impl.h) and the output of the simulator's fast
+// path.
 //
-// The mathematics are WaveplateChain's (waveplate_chain.h) for this class of chains, unrolled:
-// B_e = M_e ⋯ M_1 in named scalars, each stage's axis carried to the input frame, B_(e−1)ᵀ a_e
-// (a row of B_(e−1): Ω′_e = (dθ_e/dφ_e)·B_(e−1)ᵀ a_e), and M = B_m, in one forward pass.
+// The mathematics are WaveplateChain's (waveplate_chain.h) for this class of chains, unrolled.
+// The control update needs of the chain only the reduced task (eq. 8): each stage's axis in the
+// input frame, Ω′_e = (dθ_e/dφ_e)·B_(e−1)ᵀa_e (B_e = M_e ⋯ M_1), seen through the tangent basis
+// (e1, e2) at S_in, and the target brought back to the input frame, MᵀS*, seen through the same
+// basis. ElementalTask turns the two basis vectors through the stages instead of forming B
+// (e·(Bᵀa) = (Be)·a, one component of the turned vector): two vectors through m − 1 stages
+// instead of a matrix through m, fewer operations and a shorter dependency chain from the pose
+// to the task. Both give the general path's results to round-off (elemental_chain_test).
 //
 // Axes known at compile time (FixedStageAxes; the paper's R1R3R1 and R1R3R1R3 are
-// PaperAxes3 and PaperAxes4) make the entries of B that are exactly 0 or 1 known too: B_0 = I and
-// a rotation mixes only two rows, so B_1 is the first stage's rotation and B_2 keeps one zero.
-// The code never multiplies by them: a fifth less arithmetic in the forward pass and a shorter
-// dependency chain (B_2's entries are single products). Any other sequence of elemental axes
-// runs the same code with the axes read at run time (RuntimeStageAxes). The operations are
-// those of WaveplateChain::Evaluate and ::Output (a product with a known zero or one is exact);
-// the results agree to the last bit or two, not always exactly: GCC 12's vectorizer may pair a
-// rotation's two rows, (c·u − s·v, s·u + c·v), into one fused multiply-add-subtract even with
-// -ffp-contract=off, in one context and not in another. A build gives the same bits on every
-// run either way.
+// PaperAxes3 and PaperAxes4) let each stage's rotation compile to its two rows without a
+// switch. Any other sequence of elemental axes runs the same code with the axes read at run
+// time (RuntimeStageAxes).
 //
 // Real-time: nothing here allocates; everything is inline and unrolled.
 
-#include <array>
 #include <cmath>
 
 #include "dpc/optics/count_dispatch.h"
@@ -97,152 +95,72 @@ template <typename Axes, int N>
   return StokesVector(x, y, z);
 }
 
-namespace elemental_chain_detail {
-
-// What an entry of B is known to be.
-enum class Entry : unsigned char { kZero, kOne, kValue };
-using Pattern = std::array<std::array<Entry, 3>, 3>;
-
-// The row of B that is the axis in the input frame, and the rows a rotation about it mixes:
-// (i, j) ← (c·i − s·j, s·i + c·j) (R1 mixes rows 1, 2; R2 rows 2, 0; R3 rows 0, 1).
-constexpr int AxisRow(ElementalAxis axis) { return static_cast<int>(axis) - 1; }
-constexpr int FirstMixedRow(ElementalAxis axis) { return (AxisRow(axis) + 1) % 3; }
-constexpr int SecondMixedRow(ElementalAxis axis) { return (AxisRow(axis) + 2) % 3; }
-
-constexpr Pattern kIdentity = {{{Entry::kOne, Entry::kZero, Entry::kZero},
-                                {Entry::kZero, Entry::kOne, Entry::kZero},
-                                {Entry::kZero, Entry::kZero, Entry::kOne}}};
-constexpr Pattern kAllValues = {{{Entry::kValue, Entry::kValue, Entry::kValue},
-                                 {Entry::kValue, Entry::kValue, Entry::kValue},
-                                 {Entry::kValue, Entry::kValue, Entry::kValue}}};
-
-// The pattern of M_axis·B for B of pattern `p`: a mixed entry is 0 if both it and its partner
-// were 0, else a value.
-constexpr Pattern Rotated(const Pattern& p, ElementalAxis axis) {
-  Pattern out = p;
-  const int i = FirstMixedRow(axis), j = SecondMixedRow(axis);
-  for (int c = 0; c < 3; ++c) {
-    const bool zero = p[i][c] == Entry::kZero && p[j][c] == Entry::kZero;
-    out[i][c] = out[j][c] = zero ? Entry::kZero : Entry::kValue;
-  }
-  return out;
-}
-
-// The pattern of B_e (before stage e's rotation) for compile-time axes.
-template <typename Axes>
-constexpr Pattern PatternBefore(int stage) {
-  Pattern p = kIdentity;
-  for (int e = 0; e < stage; ++e) p = Rotated(p, Axes::At(e));
-  return p;
-}
-
-// (u, v) ← (c·u − s·v, s·u + c·v) for entries of patterns kU, kV, skipping known zeros and ones
-// (exact: the same bits as the full expressions for finite values).
-// T is double, or a vector of doubles (one lane per trajectory: sim/batch_kernel_impl.h).
-template <Entry kU, Entry kV, typename T>
-[[gnu::always_inline]] inline void Turn(T& u, T& v, T c, T s) {
-  if constexpr (kU == Entry::kZero && kV == Entry::kZero) {
-    return;
-  } else if constexpr (kU == Entry::kZero) {
-    if constexpr (kV == Entry::kOne) {
-      u = -s;
-      v = c;
-    } else {
-      u = -(s * v);
-      v = c * v;
-    }
-  } else if constexpr (kV == Entry::kZero) {
-    if constexpr (kU == Entry::kOne) {
-      u = c;
-      v = s;
-    } else {
-      const T t = u;
-      u = c * t;
-      v = s * t;
-    }
-  } else {
-    // The columns of B are unit vectors: a 1 has zeros beside it, so both are values here.
-    static_assert(kU == Entry::kValue && kV == Entry::kValue);
-    const T t = u;
-    u = c * t - s * v;
-    v = s * t + c * v;
-  }
-}
-
-}  // namespace elemental_chain_detail
-
-/// A stage's axis in the input frame, B_(e−1)ᵀ a_e: row kRow of B_(e−1), with the entries known
-/// to be 0 or 1 (pattern kPattern) left out of its products. T: double or a vector of doubles.
-template <elemental_chain_detail::Pattern kPattern, int kRow, typename T = double>
-class InputFrameAxis {
- public:
-  explicit InputFrameAxis(const T (&b)[3][3]) : b_(b) {}
-
-  /// (B_(e−1)ᵀ a_e)·(x, y, z).
-  [[gnu::always_inline]] T Dot(T x, T y, T z) const {
-    using elemental_chain_detail::Entry;
-    const T w[3] = {x, y, z};
-    T sum{};
-    bool first = true;
-    ForEachIndex<3>([&](auto col) {
-      constexpr Entry kind = kPattern[kRow][col];
-      if constexpr (kind != Entry::kZero) {
-        const T term = kind == Entry::kOne ? w[col] : w[col] * b_[kRow][col];
-        sum = first ? term : sum + term;
-        first = false;
-      }
-    });
-    return sum;
-  }
-
- private:
-  const T (&b_)[3][3];
-};
-
-/// Real-time. The forward pass at the sines and cosines of the stage angles: for each stage e in
-/// light order, on_stage(e, axis) with e a std::integral_constant and axis the stage's
-/// InputFrameAxis (before its rotation is applied); then m = M = B_m (m[row][column]).
-/// T is double with `Angles` the Lanes of the stages, or a vector of doubles (a trajectory per
-/// lane) with `Angles` an array of them, one per stage.
-template <typename Axes, typename Angles, typename T, typename OnStage>
-[[gnu::always_inline]] inline void ElementalForwardPass(const Axes& axes, const Angles& cos,
-                                                        const Angles& sin, T (&m)[3][3],
-                                                        OnStage&& on_stage) {
-  using namespace elemental_chain_detail;
+/// Real-time. The kinematics and task of the fused control update
+/// (control/fused_gradient_projection.h) at the sines and cosines of the stage angles, with the
+/// tangent basis (e1, e2) at S_in carried through the chain instead of the chain's matrix:
+///
+///   T's row of stage e  (e2·Ω′_e, −e1·Ω′_e) with Ω′_e = k_e·B_(e−1)ᵀa_e (k_e = dθ_e/dφ_e) is
+///                       (k_e·(B_(e−1)e2)[a_e], −k_e·(B_(e−1)e1)[a_e]): a component each of the
+///                       basis vectors turned by the stages before e;
+///   the task error      e = Eᵀ(MᵀS* − S_in) = ((B_(m−1)e1)·w − e1·S_in, (B_(m−1)e2)·w − e2·S_in)
+///                       with w = M_mᵀS* (the target turned back through the last stage,
+///                       off the chain: it needs only that stage's angle).
+///
+/// Two vectors turn through m − 1 stages where the matrix takes three columns through m, and
+/// neither M nor B's other rows are formed. on_row(stage, row0, row1) is called for each stage
+/// in light order (stage a std::integral_constant); then error0, error1 are set. w = (wx, wy,
+/// wz) is M_mᵀ(S* − S_out) in the measured loop with in0 = in1 = 0. T: double with `Angles`
+/// and `Scales` the Lanes of the stages, or a vector of doubles (a trajectory per lane) with
+/// arrays of them, one per stage; both give the same bits lane by lane.
+template <typename Axes, typename Angles, typename Scales, typename T, typename OnRow>
+[[gnu::always_inline]] inline void ElementalTask(const Axes& axes, const Angles& cos,
+                                                 const Angles& sin, const Scales& k,
+                                                 const T (&e1)[3], const T (&e2)[3], T wx, T wy,
+                                                 T wz, T in0, T in1, OnRow&& on_row, T* error0,
+                                                 T* error1) {
   constexpr int N = Axes::kStages;
-  const T zero{}, one = zero + 1.0;
-  m[0][0] = one, m[0][1] = zero, m[0][2] = zero;
-  m[1][0] = zero, m[1][1] = one, m[1][2] = zero;
-  m[2][0] = zero, m[2][1] = zero, m[2][2] = one;
-  // One stage with its axis and the pattern of B before it as constants.
-  const auto stage = [&](auto e, auto axis, auto pattern) {
-    constexpr ElementalAxis kAxis = decltype(axis)::value;
-    constexpr Pattern kPattern = decltype(pattern)::value;
-    constexpr int a = AxisRow(kAxis), i = FirstMixedRow(kAxis), j = SecondMixedRow(kAxis);
-    on_stage(e, InputFrameAxis<kPattern, a, T>(m));
-    const T c = cos[e()], s = sin[e()];
-    ForEachIndex<3>([&](auto col) { Turn<kPattern[i][col], kPattern[j][col]>(m[i][col], m[j][col], c, s); });
+  T u1[3] = {e1[0], e1[1], e1[2]}, u2[3] = {e2[0], e2[1], e2[2]};
+  // Component `axis` of u (a switch on a run-time axis: u stays in registers).
+  const auto component = [](const T (&u)[3], ElementalAxis axis) -> T {
+    switch (axis) {
+      case ElementalAxis::kS1: return u[0];
+      case ElementalAxis::kS2: return u[1];
+      default: return u[2];  // kS3 (elemental axes only)
+    }
   };
-  ForEachIndex<N>([&](auto e) {
-    if constexpr (Axes::kFixed) {
-      stage(e, std::integral_constant<ElementalAxis, Axes::At(e)>{},
-            std::integral_constant<Pattern, PatternBefore<Axes>(e)>{});
-    } else {
-      // B_0 = I whatever the axes; after it only values (the zeros are kept as 0.0 entries).
-      using BeforeStage = std::integral_constant<Pattern, e == 0 ? kIdentity : kAllValues>;
-      switch (axes.At(e)) {
-        case ElementalAxis::kS1:
-          stage(e, std::integral_constant<ElementalAxis, ElementalAxis::kS1>{}, BeforeStage{});
-          break;
-        case ElementalAxis::kS2:
-          stage(e, std::integral_constant<ElementalAxis, ElementalAxis::kS2>{}, BeforeStage{});
-          break;
-        default:  // kS3 (the caller passes elemental axes only)
-          stage(e, std::integral_constant<ElementalAxis, ElementalAxis::kS3>{}, BeforeStage{});
-          break;
-      }
+  ForEachIndex<N>([&](auto stage) {
+    constexpr int e = stage();
+    const ElementalAxis axis = axes.At(e);
+    const T ke = k[e];
+    on_row(stage, ke * component(u2, axis), -ke * component(u1, axis));
+    if constexpr (e + 1 < N) {
+      const T c = cos[e], s = sin[e];
+      RotateElemental(axis, c, s, u1[0], u1[1], u1[2]);
+      RotateElemental(axis, c, s, u2[0], u2[1], u2[2]);
     }
   });
+  *error0 = (u1[0] * wx + u1[1] * wy) + (u1[2] * wz - in0);
+  *error1 = (u2[0] * wx + u2[1] * wy) + (u2[2] * wz - in1);
 }
+
+/// Real-time. G = T·Tᵀ and T·φ of the fused control update, accumulated as ElementalTask's rows
+/// arrive (the last stage's row is the latest: each sum takes it in one multiply-add). T: double
+/// or a vector of doubles; mul_add(a, b, c) = a·b + c as in SmallAngleTurn.
+template <typename T>
+struct TaskGram {
+  T g11{}, g22{}, g12{}, z0{}, z1{};
+
+  template <typename MulAddFn>
+  [[gnu::always_inline]] void Add(bool first, T row0, T row1, T phi, MulAddFn mul_add) {
+    if (first) {
+      g11 = row0 * row0, g22 = row1 * row1, g12 = row0 * row1;
+      z0 = row0 * phi, z1 = row1 * phi;
+    } else {
+      g11 = mul_add(row0, row0, g11), g22 = mul_add(row1, row1, g22);
+      g12 = mul_add(row0, row1, g12);
+      z0 = mul_add(row0, phi, z0), z1 = mul_add(row1, phi, z1);
+    }
+  }
+};
 
 }  // namespace dpc

@@ -61,15 +61,6 @@ using Lanes = double __attribute__((vector_size(32)));
 /// The sum of the lanes, (x0 + x1) + (x2 + x3).
 [[gnu::always_inline]] inline double SumLanes(Lanes x) { return (x[0] + x[1]) + (x[2] + x[3]); }
 
-/// SmallAngleSinCosFused (rotation.h) lane by lane.
-[[gnu::always_inline]] inline void SmallAngleSinCosFused(Lanes x, Lanes* s, Lanes* c) {
-  const Lanes x2 = x * x;
-  *s = x * MulAdd(x2, MulAdd(x2, MulAdd(x2, Splat(-1.0 / 5040), Splat(1.0 / 120)), Splat(-1.0 / 6)),
-                  Splat(1.0));
-  *c = MulAdd(x2, MulAdd(x2, MulAdd(x2, Splat(-1.0 / 720), Splat(1.0 / 24)), Splat(-0.5)),
-              Splat(1.0));
-}
-
 /// Beyond this |angle| SinCos takes the library: n·pio2_1 below is exact only for |n| < 2²⁰.
 inline constexpr double kLanesSinCosLimit = 1.6e6;  // < 2²⁰·π/2
 

@@ -225,40 +225,28 @@ void RunBatchBlockFor(BatchLanes& lanes, const BatchBlock& block, const Axes& ax
       e1[0] = 1.0 + sign * in_x * in_x * a, e1[1] = sign * b, e1[2] = -sign * in_x;
       e2[0] = b, e2[1] = sign + in_y * in_y * a, e2[2] = -in_y;
     }
-    V m[3][3];
+    // The target turned back through the last stage, and the model loop's E·S_in.
+    V wx = Math::Select(measured_loop, target_x - out_x, target_x);
+    V wy = Math::Select(measured_loop, target_y - out_y, target_y);
+    V wz = Math::Select(measured_loop, target_z - out_z, target_z);
+    Math::Rotate(axes.At(N - 1), cosine[N - 1], -sine[N - 1], wx, wy, wz);
+    const V in0 = Math::Select(measured_loop, Math::Splat(0.0),
+                               e1[0] * in_x + e1[1] * in_y + e1[2] * in_z);
+    const V in1 = Math::Select(measured_loop, Math::Splat(0.0),
+                               e2[0] * in_x + e2[1] * in_y + e2[2] * in_z);
     V t0[4] = {}, t1[4] = {};
-    V g11, g22, g12, z0, z1;
-    ElementalForwardPass(axes, cosine, sine, m, [&](auto stage, const auto& axis) {
-      constexpr int e = stage();
-      const V ke = k[e];
-      const V row0 = axis.Dot(ke * e2[0], ke * e2[1], ke * e2[2]);
-      const V row1 = axis.Dot(-ke * e1[0], -ke * e1[1], -ke * e1[2]);
-      t0[e] = row0;
-      t1[e] = row1;
-      if constexpr (e == 0) {
-        g11 = row0 * row0, g22 = row1 * row1, g12 = row0 * row1;
-        z0 = row0 * phi[e], z1 = row1 * phi[e];
-      } else {
-        g11 = fma(row0, row0, g11), g22 = fma(row1, row1, g22);
-        g12 = fma(row0, row1, g12);
-        z0 = fma(row0, phi[e], z0), z1 = fma(row1, phi[e], z1);
-      }
-    });
-    V ex, ey, ez;
-    {
-      const V dx = target_x - out_x, dy = target_y - out_y, dz = target_z - out_z;
-      const V mx = m[0][0] * dx + m[1][0] * dy + m[2][0] * dz;
-      const V my = m[0][1] * dx + m[1][1] * dy + m[2][1] * dz;
-      const V mz = m[0][2] * dx + m[1][2] * dy + m[2][2] * dz;
-      const V px = m[0][0] * target_x + m[1][0] * target_y + m[2][0] * target_z - in_x;
-      const V py = m[0][1] * target_x + m[1][1] * target_y + m[2][1] * target_z - in_y;
-      const V pz = m[0][2] * target_x + m[1][2] * target_y + m[2][2] * target_z - in_z;
-      ex = Math::Select(measured_loop, mx, px);
-      ey = Math::Select(measured_loop, my, py);
-      ez = Math::Select(measured_loop, mz, pz);
-    }
-    const V error0 = e1[0] * ex + e1[1] * ey + e1[2] * ez;
-    const V error1 = e2[0] * ex + e2[1] * ey + e2[2] * ez;
+    TaskGram<V> gram;
+    V error0, error1;
+    ElementalTask(
+        axes, cosine, sine, k, e1, e2, wx, wy, wz, in0, in1,
+        [&](auto stage, V row0, V row1) {
+          constexpr int e = stage();
+          t0[e] = row0;
+          t1[e] = row1;
+          gram.Add(e == 0, row0, row1, phi[e], fma);
+        },
+        &error0, &error1);
+    const V g11 = gram.g11, g22 = gram.g22, g12 = gram.g12, z0 = gram.z0, z1 = gram.z1;
     // The null-space term (gpt: while some |φ_i| > threshold): MaxLane(Abs(φ)).
     V largest;
     {
@@ -275,9 +263,9 @@ void RunBatchBlockFor(BatchLanes& lanes, const BatchBlock& block, const Axes& ax
     {
       const V inverse = 1.0 / det;
       const V r0 = step * error0 + mu_null * z0, r1 = step * error1 + mu_null * z1;
-      const V u0 = g22 * r0 - g12 * r1, u1 = g11 * r1 - g12 * r0;
       for (int e = 0; e < N; ++e) {
-        const V v = t0[e] * u0 + t1[e] * u1;
+        const V p0 = t0[e] * g22 - t1[e] * g12, p1 = t1[e] * g11 - t0[e] * g12;
+        const V v = p0 * r0 + p1 * r1;
         delta[e] = fma(v, inverse, -mu_null * phi[e]);
         dtheta[e] = fma(k[e] * v, inverse, -(mu_null * k[e]) * phi[e]);
       }
@@ -299,15 +287,7 @@ void RunBatchBlockFor(BatchLanes& lanes, const BatchBlock& block, const Axes& ax
     M finite = ~M{}, small = ~M{};
     V cos_next[4], sin_next[4];
     for (int e = 0; e < N; ++e) {
-      const V x2 = dtheta[e] * dtheta[e];
-      const V sd = dtheta[e] * fma(x2, fma(x2, fma(x2, Math::Splat(-1.0 / 5040), Math::Splat(1.0 / 120)),
-                                           Math::Splat(-1.0 / 6)),
-                                   Math::Splat(1.0));
-      const V cd = fma(x2, fma(x2, fma(x2, Math::Splat(-1.0 / 720), Math::Splat(1.0 / 24)),
-                               Math::Splat(-0.5)),
-                       Math::Splat(1.0));
-      cos_next[e] = fma(cosine[e], cd, -(sine[e] * sd));
-      sin_next[e] = fma(sine[e], cd, cosine[e] * sd);
+      SmallAngleTurn(cosine[e], sine[e], dtheta[e], fma, &cos_next[e], &sin_next[e]);
       finite &= 0.0 * delta[e] == 0.0;  // 0·x is NaN for NaN and ±Inf
       small &= Math::Abs(dtheta[e]) < kSmallAngleLimit;
     }

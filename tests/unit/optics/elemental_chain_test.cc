@@ -23,40 +23,55 @@ ElementalPose<N> PoseOf(const ChainPose& chain_pose) {
   return pose;
 }
 
-// The forward pass against WaveplateChain::Evaluate: M, and each stage's axis in the input frame
-// (Ω′_e / k) dotted with a vector; the output against WaveplateChain::Output. The same
-// operations, but GCC 12 may pair a rotation's two rows into one fused multiply-add-subtract in
-// either (its vectorizer does so despite -ffp-contract=off), hence a last-bit tolerance.
+// ElementalTask against WaveplateChain::Evaluate: each stage's task row (e2·Ω′_e, −e1·Ω′_e) at
+// the tangent basis of S_in, and the task error Eᵀ(MᵀS* − S_in) of the model loop and
+// EᵀMᵀ(S* − S_out) of the measured loop; the output against WaveplateChain::Output. The
+// general code forms M and the generators, ElementalTask turns the basis: the same quantities
+// by other operations, equal to round-off.
 template <typename Axes>
-void ExpectForwardPassEqualsEvaluate(const Axes& axes, const std::string& text) {
+void ExpectTaskEqualsEvaluate(const Axes& axes, const std::string& text) {
   constexpr int N = Axes::kStages;
   ASSERT_EQ(static_cast<int>(text.size()), N);
-  const double k = 1.0;  // Ω′ is then the input-frame axis itself
+  const double k = 2.5;  // rad per unit; Ω′ carries it
   const WaveplateChain chain = WaveplateChain::FromAxes(text, k);
+  const Lanes scales = {k, k, k, N == 4 ? k : 0.0};
   std::mt19937_64 rng(11);
   std::normal_distribution<double> normal;
   for (int trial = 0; trial < 200; ++trial) {
     ControlVector phi(N);
     for (int e = 0; e < N; ++e) phi[e] = 2.0 * normal(rng);
     const StokesVector s_in = StokesVector(normal(rng), normal(rng), normal(rng)).normalized();
-    const Vector3 w(normal(rng), normal(rng), normal(rng));
+    const StokesVector target = StokesVector(normal(rng), normal(rng), normal(rng)).normalized();
+    const StokesVector s_out_measured =
+        StokesVector(normal(rng), normal(rng), normal(rng)).normalized();
     ChainPose chain_pose;
     chain.ComputePose(phi, &chain_pose);
     ChainKinematics kinematics;
     chain.Evaluate(chain_pose, s_in, &kinematics, false);
     const ElementalPose<N> pose = PoseOf<N>(chain_pose);
-    double m[3][3];
-    double dots[N];
-    ElementalForwardPass(axes, pose.cos, pose.sin, m, [&](auto e, const auto& axis) {
-      dots[e] = axis.Dot(w[0], w[1], w[2]);
-    });
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) ASSERT_NEAR(m[r][c], kinematics.mueller(r, c), 1e-15) << text;
-    }
-    for (int e = 0; e < N; ++e) {
-      // The general code scales first (Ω′ = k·row); with k = 1 the products are the row's.
-      const Vector3 generator = kinematics.input_generators.col(e);
-      EXPECT_NEAR(dots[e], generator.dot(w), 1e-15 * (1.0 + w.norm())) << text << " stage " << e;
+    Vector3 e1, e2;
+    TangentBasis(s_in, &e1, &e2);
+    const double basis1[3] = {e1[0], e1[1], e1[2]}, basis2[3] = {e2[0], e2[1], e2[2]};
+    for (const bool measured : {false, true}) {
+      // w: what the error looks at, turned back through the last stage alone.
+      const StokesVector seen = measured ? StokesVector(target - s_out_measured) : target;
+      double wx = seen[0], wy = seen[1], wz = seen[2];
+      RotateElemental(axes.At(N - 1), pose.cos[N - 1], -pose.sin[N - 1], wx, wy, wz);
+      const double in0 = measured ? 0.0 : e1.dot(s_in), in1 = measured ? 0.0 : e2.dot(s_in);
+      double rows0[N], rows1[N], error0, error1;
+      ElementalTask(
+          axes, pose.cos, pose.sin, scales, basis1, basis2, wx, wy, wz, in0, in1,
+          [&](auto e, double row0, double row1) { rows0[e] = row0, rows1[e] = row1; }, &error0,
+          &error1);
+      for (int e = 0; e < N; ++e) {
+        const Vector3 generator = kinematics.input_generators.col(e);
+        EXPECT_NEAR(rows0[e], e2.dot(generator), 1e-14) << text << " stage " << e;
+        EXPECT_NEAR(rows1[e], -e1.dot(generator), 1e-14) << text << " stage " << e;
+      }
+      const Vector3 back = kinematics.mueller.transpose() * seen;
+      const Vector3 error = measured ? back : Vector3(back - s_in);
+      EXPECT_NEAR(error0, e1.dot(error), 1e-14) << text << (measured ? " measured" : " model");
+      EXPECT_NEAR(error1, e2.dot(error), 1e-14) << text << (measured ? " measured" : " model");
     }
     EXPECT_LT((ElementalOutput(axes, pose, s_in) - chain.Output(chain_pose, s_in)).norm(), 1e-15)
         << text;
@@ -64,16 +79,16 @@ void ExpectForwardPassEqualsEvaluate(const Axes& axes, const std::string& text) 
 }
 
 TEST(ElementalChainTest, ThePapersDevicesAtCompileTimeEqualTheGeneralChain) {
-  ExpectForwardPassEqualsEvaluate(PaperAxes3{}, "131");
-  ExpectForwardPassEqualsEvaluate(PaperAxes4{}, "3131");
+  ExpectTaskEqualsEvaluate(PaperAxes3{}, "131");
+  ExpectTaskEqualsEvaluate(PaperAxes4{}, "3131");
 }
 
 TEST(ElementalChainTest, AxesAtRunTimeEqualTheGeneralChain) {
   using A = ElementalAxis;
-  ExpectForwardPassEqualsEvaluate(RuntimeStageAxes<3>{{A::kS1, A::kS2, A::kS1}}, "121");
-  ExpectForwardPassEqualsEvaluate(RuntimeStageAxes<3>{{A::kS3, A::kS3, A::kS2}}, "332");
-  ExpectForwardPassEqualsEvaluate(RuntimeStageAxes<4>{{A::kS2, A::kS3, A::kS2, A::kS3}}, "2323");
-  ExpectForwardPassEqualsEvaluate(RuntimeStageAxes<4>{{A::kS1, A::kS3, A::kS1, A::kS3}}, "1313");
+  ExpectTaskEqualsEvaluate(RuntimeStageAxes<3>{{A::kS1, A::kS2, A::kS1}}, "121");
+  ExpectTaskEqualsEvaluate(RuntimeStageAxes<3>{{A::kS3, A::kS3, A::kS2}}, "332");
+  ExpectTaskEqualsEvaluate(RuntimeStageAxes<4>{{A::kS2, A::kS3, A::kS2, A::kS3}}, "2323");
+  ExpectTaskEqualsEvaluate(RuntimeStageAxes<4>{{A::kS1, A::kS3, A::kS1, A::kS3}}, "1313");
 }
 
 TEST(ElementalChainTest, ThePapersDevicesAreDispatchedToTheirCompileTimeAxes) {

@@ -30,18 +30,25 @@ TEST(LanesTest, MaxAndSumOfTheLanes) {
   EXPECT_TRUE(std::isnan(SumLanes(Lanes{0.0, 0.0, NAN, 0.0})));
 }
 
-TEST(LanesTest, SmallAngleSinCosFusedEqualsTheScalarSeriesInEveryLane) {
+TEST(LanesTest, SmallAngleTurnOnLanesEqualsTheScalarTurnInEveryLane) {
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> x(-kSmallAngleLimit, kSmallAngleLimit);
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI);
   for (int trial = 0; trial < 1000; ++trial) {
-    const Lanes angles = {x(rng), x(rng), x(rng), x(rng)};
-    Lanes s, c;
-    SmallAngleSinCosFused(angles, &s, &c);
+    const Lanes steps = {x(rng), x(rng), x(rng), x(rng)};
+    const Lanes theta = {angle(rng), angle(rng), angle(rng), angle(rng)};
+    Lanes c, s;
+    for (int i = 0; i < 4; ++i) c[i] = std::cos(theta[i]), s[i] = std::sin(theta[i]);
+    Lanes c_next, s_next;
+    SmallAngleTurn(c, s, steps, [](Lanes a, Lanes b, Lanes d) { return MulAdd(a, b, d); },
+                   &c_next, &s_next);
     for (int i = 0; i < 4; ++i) {
-      double scalar_s, scalar_c;
-      SmallAngleSinCosFused(angles[i], &scalar_s, &scalar_c);
-      ASSERT_EQ(s[i], scalar_s);
-      ASSERT_EQ(c[i], scalar_c);
+      double scalar_c, scalar_s;
+      SmallAngleTurn(c[i], s[i], steps[i],
+                     [](double a, double b, double d) { return MulAdd(a, b, d); }, &scalar_c,
+                     &scalar_s);
+      ASSERT_EQ(c_next[i], scalar_c);
+      ASSERT_EQ(s_next[i], scalar_s);
     }
   }
 }

@@ -107,23 +107,29 @@ TEST_F(RotationTest, MulAddIsAProductPlusASum) {
   EXPECT_TRUE(std::isnan(MulAdd(NAN, 1.0, 1.0)));
 }
 
-TEST_F(RotationTest, SmallAngleSinCosFusedIsTheSeriesToAboutOneUlp) {
+TEST_F(RotationTest, SmallAngleTurnIsTheAngleAdditionToAboutOneUlp) {
   std::uniform_real_distribution<double> x(-kSmallAngleLimit, kSmallAngleLimit);
-  double worst_sin = 0.0, worst_cos = 0.0;
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI);
+  const auto mul_add = [](double a, double b, double c) { return MulAdd(a, b, c); };
+  double worst_cos = 0.0, worst_sin = 0.0;
   for (int i = 0; i < 200000; ++i) {
-    const double v = x(rng_);
-    if (v == 0.0) continue;
-    double s, c;
-    SmallAngleSinCosFused(v, &s, &c);
-    worst_sin = std::max(worst_sin, std::abs(s - std::sin(v)) / std::abs(std::sin(v)));
-    worst_cos = std::max(worst_cos, std::abs(c - std::cos(v)));
+    const double theta = angle(rng_), step = x(rng_);
+    const double c = std::cos(theta), s = std::sin(theta);
+    double c_next, s_next;
+    SmallAngleTurn(c, s, step, mul_add, &c_next, &s_next);
+    // The exact angle addition of the given c, s (long double: 64-bit mantissa).
+    const long double cx = std::cos(static_cast<long double>(step));
+    const long double sx = std::sin(static_cast<long double>(step));
+    const long double want_cos = c * cx - s * sx, want_sin = s * cx + c * sx;
+    worst_cos = std::max(worst_cos, static_cast<double>(std::abs(c_next - want_cos)));
+    worst_sin = std::max(worst_sin, static_cast<double>(std::abs(s_next - want_sin)));
   }
-  EXPECT_LT(worst_sin, 4.5e-16);  // 2 ulp
   EXPECT_LT(worst_cos, 2.3e-16);  // 1 ulp of 1
-  double s, c;
-  SmallAngleSinCosFused(0.0, &s, &c);
-  EXPECT_EQ(s, 0.0);
-  EXPECT_EQ(c, 1.0);
+  EXPECT_LT(worst_sin, 2.3e-16);
+  double c_next, s_next;
+  SmallAngleTurn(0.6, 0.8, 0.0, mul_add, &c_next, &s_next);  // no step: the pose unchanged
+  EXPECT_EQ(c_next, 0.6);
+  EXPECT_EQ(s_next, 0.8);
 }
 
 TEST_F(RotationTest, SmallArcSineIsExactToAboutOneUlpUpToItsLimit) {
