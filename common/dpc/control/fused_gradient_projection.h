@@ -119,17 +119,14 @@ class FusedGradientProjection {
     FusedUpdateResult result;
     Vector3 e1, e2;
     TangentBasis(s_in, &e1, &e2);
-    // The target as the last stage sees it, turned back through that stage alone: M_mᵀS*
-    // (or M_mᵀ(S* − S_out) in the measured loop), from the command's pose, off the chain.
-    double wx, wy, wz;
+    // What the task error looks at in the output frame: S*, or S* − S_out in the measured loop.
+    double sx, sy, sz;
     if (measured_) {
-      wx = target_[0] - s_out_measured[0], wy = target_[1] - s_out_measured[1],
-      wz = target_[2] - s_out_measured[2];
+      sx = target_[0] - s_out_measured[0], sy = target_[1] - s_out_measured[1],
+      sz = target_[2] - s_out_measured[2];
     } else {
-      wx = target_[0], wy = target_[1], wz = target_[2];
+      sx = target_[0], sy = target_[1], sz = target_[2];
     }
-    RotateElemental(axes_.At(kStages - 1), pose->cos[kStages - 1], -pose->sin[kStages - 1], wx,
-                    wy, wz);
     // e1·S_in, e2·S_in of the model loop's e = Eᵀ(MᵀS* − S_in): 0 up to rounding for a unit
     // S_in, kept so that a measured S_in off the sphere gives the general path's error.
     const double in0 = measured_ ? 0.0 : e1[0] * s_in[0] + e1[1] * s_in[1] + e1[2] * s_in[2];
@@ -137,12 +134,11 @@ class FusedGradientProjection {
     // Kinematics, task rows and task error (ElementalTask); G and Tφ accumulate as the rows
     // arrive.
     const Lanes phi = pose->phi;
-    const double basis1[3] = {e1[0], e1[1], e1[2]}, basis2[3] = {e2[0], e2[1], e2[2]};
     double rows0[4] = {}, rows1[4] = {};
     TaskGram<double> gram;
     double error0, error1;
     ElementalTask(
-        axes_, pose->cos, pose->sin, rad_per_unit_, basis1, basis2, wx, wy, wz, in0, in1,
+        axes_, pose->cos, pose->sin, rad_per_unit_, e1, e2, sx, sy, sz, in0, in1,
         [&](auto stage, double row0, double row1) {
           constexpr int e = stage();
           rows0[e] = row0;

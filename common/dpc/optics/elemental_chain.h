@@ -108,17 +108,23 @@ template <typename Axes, int N>
 ///
 /// Two vectors turn through m − 1 stages where the matrix takes three columns through m, and
 /// neither M nor B's other rows are formed. on_row(stage, row0, row1) is called for each stage
-/// in light order (stage a std::integral_constant); then error0, error1 are set. w = (wx, wy,
-/// wz) is M_mᵀ(S* − S_out) in the measured loop with in0 = in1 = 0. T: double with `Angles`
+/// in light order (stage a std::integral_constant); then error0, error1 are set. (sx, sy, sz) is
+/// the output-frame vector the error looks at: S* in the model loop, with in0 = e1·S_in and
+/// in1 = e2·S_in; S* − S_out in the measured loop, with in0 = in1 = 0. T: double with `Angles`
 /// and `Scales` the Lanes of the stages, or a vector of doubles (a trajectory per lane) with
-/// arrays of them, one per stage; both give the same bits lane by lane.
-template <typename Axes, typename Angles, typename Scales, typename T, typename OnRow>
+/// arrays of them, one per stage; both give the same bits lane by lane. e1, e2: anything whose
+/// [0], [1], [2] are the basis vector's components as T.
+template <typename Axes, typename Angles, typename Scales, typename Basis, typename T,
+          typename OnRow>
 [[gnu::always_inline]] inline void ElementalTask(const Axes& axes, const Angles& cos,
                                                  const Angles& sin, const Scales& k,
-                                                 const T (&e1)[3], const T (&e2)[3], T wx, T wy,
-                                                 T wz, T in0, T in1, OnRow&& on_row, T* error0,
+                                                 const Basis& e1, const Basis& e2, T sx, T sy,
+                                                 T sz, T in0, T in1, OnRow&& on_row, T* error0,
                                                  T* error1) {
   constexpr int N = Axes::kStages;
+  // w: (sx, sy, sz) turned back through the last stage (M_mᵀ), from the pose alone.
+  T wx = sx, wy = sy, wz = sz;
+  RotateElemental<T>(axes.At(N - 1), cos[N - 1], -sin[N - 1], wx, wy, wz);
   T u1[3] = {e1[0], e1[1], e1[2]}, u2[3] = {e2[0], e2[1], e2[2]};
   // Component `axis` of u (a switch on a run-time axis: u stays in registers).
   const auto component = [](const T (&u)[3], ElementalAxis axis) -> T {

@@ -225,11 +225,11 @@ void RunBatchBlockFor(BatchLanes& lanes, const BatchBlock& block, const Axes& ax
       e1[0] = 1.0 + sign * in_x * in_x * a, e1[1] = sign * b, e1[2] = -sign * in_x;
       e2[0] = b, e2[1] = sign + in_y * in_y * a, e2[2] = -in_y;
     }
-    // The target turned back through the last stage, and the model loop's E·S_in.
-    V wx = Math::Select(measured_loop, target_x - out_x, target_x);
-    V wy = Math::Select(measured_loop, target_y - out_y, target_y);
-    V wz = Math::Select(measured_loop, target_z - out_z, target_z);
-    Math::Rotate(axes.At(N - 1), cosine[N - 1], -sine[N - 1], wx, wy, wz);
+    // What the task error looks at (S*, or S* − S_out in the measured loop), and the model
+    // loop's E·S_in.
+    const V sx = Math::Select(measured_loop, target_x - out_x, target_x);
+    const V sy = Math::Select(measured_loop, target_y - out_y, target_y);
+    const V sz = Math::Select(measured_loop, target_z - out_z, target_z);
     const V in0 = Math::Select(measured_loop, Math::Splat(0.0),
                                e1[0] * in_x + e1[1] * in_y + e1[2] * in_z);
     const V in1 = Math::Select(measured_loop, Math::Splat(0.0),
@@ -238,7 +238,7 @@ void RunBatchBlockFor(BatchLanes& lanes, const BatchBlock& block, const Axes& ax
     TaskGram<V> gram;
     V error0, error1;
     ElementalTask(
-        axes, cosine, sine, k, e1, e2, wx, wy, wz, in0, in1,
+        axes, cosine, sine, k, e1, e2, sx, sy, sz, in0, in1,
         [&](auto stage, V row0, V row1) {
           constexpr int e = stage();
           t0[e] = row0;

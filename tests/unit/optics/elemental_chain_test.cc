@@ -51,16 +51,13 @@ void ExpectTaskEqualsEvaluate(const Axes& axes, const std::string& text) {
     const ElementalPose<N> pose = PoseOf<N>(chain_pose);
     Vector3 e1, e2;
     TangentBasis(s_in, &e1, &e2);
-    const double basis1[3] = {e1[0], e1[1], e1[2]}, basis2[3] = {e2[0], e2[1], e2[2]};
     for (const bool measured : {false, true}) {
-      // w: what the error looks at, turned back through the last stage alone.
+      // What the error looks at, in the output frame.
       const StokesVector seen = measured ? StokesVector(target - s_out_measured) : target;
-      double wx = seen[0], wy = seen[1], wz = seen[2];
-      RotateElemental(axes.At(N - 1), pose.cos[N - 1], -pose.sin[N - 1], wx, wy, wz);
       const double in0 = measured ? 0.0 : e1.dot(s_in), in1 = measured ? 0.0 : e2.dot(s_in);
       double rows0[N], rows1[N], error0, error1;
       ElementalTask(
-          axes, pose.cos, pose.sin, scales, basis1, basis2, wx, wy, wz, in0, in1,
+          axes, pose.cos, pose.sin, scales, e1, e2, seen[0], seen[1], seen[2], in0, in1,
           [&](auto e, double row0, double row1) { rows0[e] = row0, rows1[e] = row1; }, &error0,
           &error1);
       for (int e = 0; e < N; ++e) {
