@@ -3,7 +3,8 @@
 # builtin DDS Security (PKI-DH authentication, Access-Permissions, AES-GCM-GMAC crypto).
 #
 #   make-bench-pki.sh --out DIR [--bench ID] [--controllers ID,ID...] [--days N]
-#                     [--domains MIN-MAX|N] [--rotate] [--expired NAME ...]
+#                     [--domains MIN-MAX|N] [--rotate [--keep-replaced]] [--revoke-replaced]
+#                     [--expired NAME ...]
 #
 # --out DIR          where everything goes (created). Re-running on an existing DIR keeps what is
 #                    there and only adds missing identities (e.g. a new controller id).
@@ -16,6 +17,13 @@
 #                    re-sign governance and permissions (each file written aside, then mv'd);
 #                    the replaced certificates are revoked and DIR/ca/crl.pem (re)written: every
 #                    participant that loads it refuses them (a copied old key is useless)
+# --keep-replaced    with --rotate: the replaced certificates stay valid for now. For a running
+#                    bench: rotate with it, send SIGHUP to every service (each makes its DDS
+#                    participant again with its new identity, which the others still accept),
+#                    then run --revoke-replaced and send SIGHUP again (each loads the new CRL)
+# --revoke-replaced  revoke every certificate this CA issued that is valid and no identity's
+#                    current one (replaced by a rotation, or of a retired controller), and write
+#                    DIR/ca/crl.pem; nothing else changes
 # --expired NAME     (re-)issue NAME's certificate and grant already expired (tests); repeatable
 #                    or comma-separated
 #
@@ -70,6 +78,7 @@ TOPICS="dpc_stokes_sample dpc_waveplate_command dpc_waveplate_state dpc_controll
         dpc_device_description dpc_target dpc_target_request dpc_target_reply dpc_bench_summary"
 
 OUT="" BENCH=bench1 CONTROLLERS=main,standby DAYS=365 DOMAINS="" ROTATE=0 EXPIRED="" REVOKED=0
+KEEP_REPLACED=0 REVOKE_REPLACED=0 CONTROLLERS_GIVEN=0
 usage() { awk 'NR > 1 && !/^#/ { exit } NR > 1 { sub(/^# ?/, ""); print }' "${BASH_SOURCE[0]}" >&2; exit 2; }
 die() { echo "make-bench-pki.sh: $*" >&2; exit 2; }
 for kind in RTPS DISCOVERY LIVELINESS METADATA DATA; do
@@ -80,10 +89,12 @@ while [[ $# -gt 0 ]]; do
   case $1 in
     --out) OUT=${2:?}; shift 2 ;;
     --bench) BENCH=${2:?}; shift 2 ;;
-    --controllers) CONTROLLERS=${2:?}; shift 2 ;;
+    --controllers) CONTROLLERS=${2:?}; CONTROLLERS_GIVEN=1; shift 2 ;;
     --days) DAYS=${2:?}; shift 2 ;;
     --domains) DOMAINS=${2:?}; shift 2 ;;
     --rotate) ROTATE=1; shift ;;
+    --keep-replaced) KEEP_REPLACED=1; shift ;;
+    --revoke-replaced) REVOKE_REPLACED=1; shift ;;
     --expired) EXPIRED+=" ${2:?}"; shift 2
                while [[ $# -gt 0 && $1 != --* ]]; do EXPIRED+=" $1"; shift; done ;;
     -h|--help) usage ;;
@@ -91,6 +102,14 @@ while [[ $# -gt 0 ]]; do
   esac
 done
 [[ -n $OUT ]] || usage
+[[ $KEEP_REPLACED == 0 || $ROTATE == 1 ]] || die "--keep-replaced goes with --rotate"
+[[ $KEEP_REPLACED == 0 || $REVOKE_REPLACED == 0 ]] || die "--keep-replaced and --revoke-replaced contradict each other"
+if [[ $REVOKE_REPLACED == 1 && $CONTROLLERS_GIVEN == 0 ]]; then
+  # Revoking adds no identity: the controllers are the directory's own.
+  CONTROLLERS=$(find "$OUT" -mindepth 1 -maxdepth 1 -type d -name 'controller-*' -printf '%f\n' 2>/dev/null |
+                sed 's/^controller-//' | sort | paste -sd, -)
+  [[ -n $CONTROLLERS ]] || die "$OUT has no controller identity: nothing of a bench to revoke"
+fi
 name_re='^[A-Za-z0-9_-]+$'
 [[ $BENCH =~ $name_re ]] || die "bad bench id '$BENCH'"
 [[ $DAYS =~ ^[1-9][0-9]*$ ]] || die "bad --days '$DAYS'"
@@ -339,7 +358,7 @@ for name in "${IDENTITIES[@]}"; do
     continue
   fi
   mkdir -p "$dir"
-  if [[ $ROTATE == 1 && -s $dir/cert.pem ]]; then
+  if [[ $ROTATE == 1 && $KEEP_REPLACED == 0 && -s $dir/cert.pem ]]; then
     # The certificate replaced is revoked (if this CA issued it and it is not revoked yet).
     serial=$(openssl x509 -noout -serial -in "$dir/cert.pem" 2>/dev/null || true)
     serial=${serial#serial=}
@@ -361,6 +380,26 @@ for name in "${IDENTITIES[@]}"; do
   install_into "$dir" key.pem cert.pem permissions.xml permissions.p7s
   log "issued $name (valid until $(cert_date "$dir/cert.pem" enddate)$([[ $expired == 1 ]] && echo ', EXPIRED'))"
 done
+if [[ $KEEP_REPLACED == 1 ]]; then
+  log "the replaced certificates stay valid until --revoke-replaced (send SIGHUP to every service first)"
+fi
+if [[ $REVOKE_REPLACED == 1 ]]; then
+  # The CA's own certificate is in the index too (self-signed by `openssl ca`): never revoked.
+  serial=$(openssl x509 -noout -serial -in "$CA/ca.cert.pem")
+  current=" ${serial#serial=} "
+  for name in "${IDENTITIES[@]}"; do
+    serial=$(openssl x509 -noout -serial -in "$OUT/$name/cert.pem")
+    current+="${serial#serial=} "
+  done
+  # index.txt: status, expiry, revocation, serial, file, subject (tab-separated).
+  mapfile -t replaced < <(awk -F'\t' '$1 == "V" { print $4 }' "$CA/index.txt")
+  for serial in "${replaced[@]}"; do
+    [[ $current == *" $serial "* ]] && continue
+    ca -revoke "newcerts/$serial.pem" -crl_reason superseded
+    REVOKED=$((REVOKED + 1))
+  done
+  [[ $REVOKED -gt 0 ]] || log "no replaced certificate left to revoke"
+fi
 if [[ $REVOKED -gt 0 ]]; then
   # Ten years: an expired CRL would make Fast DDS refuse every certificate of the CA.
   ca -gencrl -crldays 3650 -out "$CA/.crl.pem.new"

@@ -5,13 +5,14 @@
 namespace dpc::services {
 namespace {
 
-/// SIGINT and SIGTERM stop the service; SIGUSR1 (sent by the watcher's destructor to its own
-/// thread) ends the watcher.
+/// SIGINT and SIGTERM stop the service, SIGHUP asks it to reload its participant; SIGUSR1 (sent
+/// by the watcher's destructor to its own thread) ends the watcher.
 sigset_t WatchedSignals() {
   sigset_t set;
   sigemptyset(&set);
   sigaddset(&set, SIGINT);
   sigaddset(&set, SIGTERM);
+  sigaddset(&set, SIGHUP);
   sigaddset(&set, SIGUSR1);
   return set;
 }
@@ -58,6 +59,14 @@ void SignalWatcher::Loop() {
     if (signal == SIGUSR1) {
       if (quitting_.load()) return;
       continue;  // someone else's SIGUSR1: not ours to act on
+    }
+    if (signal == SIGHUP) {
+      if (Service* service = service_.load()) {
+        service->RequestReload();
+      } else {
+        spdlog::warn("SIGHUP before the service started: nothing to reload yet");
+      }
+      continue;
     }
     signal_ = signal;
     if (Service* service = service_.load()) service->stop();

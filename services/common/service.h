@@ -11,9 +11,13 @@
 //   cannot start (DDS, device, profiles) kInitializationError (4)
 //   failed while running                 kRuntimeError (1)
 //   SIGINT / SIGTERM                     stop() at once; run() ends cleanly: kOk (0)
+//   SIGHUP                               RequestReload(): the service makes its DDS participant
+//                                        again from the credentials and profiles on disk (a
+//                                        rotation of DDS Security credentials without a restart)
 //
-// SIGINT and SIGTERM are blocked in every thread (before Fast DDS starts its own) and taken by
-// one watcher thread (sigwait), which calls stop(): docker stops containers with SIGTERM.
+// SIGINT, SIGTERM and SIGHUP are blocked in every thread (before Fast DDS starts its own) and
+// taken by one watcher thread (sigwait), which calls stop() or RequestReload(): docker stops
+// containers with SIGTERM.
 
 #include <atomic>
 #include <chrono>
@@ -57,6 +61,14 @@ class Service {
   void stop();
   bool stopped() const { return stopped_.load(std::memory_order_relaxed); }
 
+  /// Thread-safe (SIGHUP): asks run() to make the service's DDS participant and its endpoints
+  /// again, from the credentials and profiles as they are on disk now. A service whose new
+  /// participant cannot be made keeps the one it has (and says why).
+  void RequestReload() {
+    reload_requested_.store(true);
+    OnReloadRequested();
+  }
+
  protected:
   Service() = default;
   /// Waits until stop() or `deadline` (steady clock); true if stopped.
@@ -66,16 +78,23 @@ class Service {
   }
   /// Called once by stop(), after the flag is set: wake waits of the service's own.
   virtual void OnStop() {}
+  /// Called by RequestReload, after the request is recorded (from the signal watcher's thread).
+  virtual void OnReloadRequested() {}
+  /// Whether a reload was requested since the last call (run() polls it where it may rebuild
+  /// its participant).
+  bool TakeReloadRequest() { return reload_requested_.exchange(false); }
 
  private:
   std::atomic<bool> stopped_{false};
+  std::atomic<bool> reload_requested_{false};
   std::mutex mutex_;
   std::condition_variable stop_requested_;
 };
 
-/// Blocks SIGINT, SIGTERM and SIGPIPE in the calling thread and every thread it starts after;
-/// a watcher thread takes SIGINT and SIGTERM and calls the service's stop(). Construct on the
-/// main thread before any other thread starts (Fast DDS's included).
+/// Blocks SIGINT, SIGTERM, SIGHUP and SIGPIPE in the calling thread and every thread it starts
+/// after; a watcher thread takes SIGINT and SIGTERM and calls the service's stop(), and SIGHUP,
+/// its RequestReload() (ignored before the service exists). Construct on the main thread before
+/// any other thread starts (Fast DDS's included).
 class SignalWatcher {
  public:
   SignalWatcher();
@@ -85,7 +104,7 @@ class SignalWatcher {
 
   /// From now on a signal stops `service`; one that came before stops it at once.
   void Watch(Service* service);
-  /// The signal that arrived (0: none).
+  /// The signal that stopped the service (0: none).
   int signal() const { return signal_.load(); }
 
  private:

@@ -114,6 +114,10 @@ void PeerLog::operator()(bool warning, const std::string& text) {
   spdlog::log(warning ? spdlog::level::warn : spdlog::level::info, "{}{}", text, suffix);
 }
 
+void LogLine(bool error, const std::string& text) {
+  spdlog::log(error ? spdlog::level::err : spdlog::level::info, "{}", text);
+}
+
 std::function<void(bool, const std::string&)> PeerLogger() {
   return [log = std::make_shared<PeerLog>()](bool warning, const std::string& text) { (*log)(warning, text); };
 }

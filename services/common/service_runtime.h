@@ -84,6 +84,9 @@ class PeerLog {
   uint64_t not_shown_ = 0;
 };
 
+/// One line in the service's log: an error, or information (e.g. bus::ParticipantMaker's).
+void LogLine(bool error, const std::string& text);
+
 /// A PeerLog of its own behind a copyable function (for BusOptions::on_peer, through
 /// bus::DescribedPeerEvents).
 std::function<void(bool warning, const std::string& text)> PeerLogger();

@@ -13,6 +13,7 @@
 #include "dpc/bench/clock.h"
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/message_conversion.h"
+#include "dpc/bus/participant_maker.h"
 #include "dpc/config/scenario_validation.h"
 #include "log_limiter.h"
 #include "service.h"
@@ -62,39 +63,26 @@ class ControllerService final : public Service {
       : bench_id_(common.bench_id),
         status_period_(std::chrono::milliseconds(static_cast<int64_t>(options.status_period_s * 1000))),
         core_(Settings(common, options)),
-        participant_({common.domain_id, "dpc-controller/" + options.settings.controller_id,
-                      {common.security_dir,
-                       common.identity.empty() ? "controller-" + options.settings.controller_id : common.identity}},
-                     bus::DescribedPeerEvents(PeerLogger())),
-        command_writer_(participant_.MakeWriter<msg::WaveplateCommand>(bench_id_, options.settings.controller_id)),
-        status_writer_(participant_.MakeWriter<msg::ControllerStatus>(bench_id_)) {
-    devices_ = participant_.MakeReader<msg::DeviceDescription>(
-        bench_id_, [this](const msg::DeviceDescription& message, const auto& info) { OnDevice(message, info); });
-    targets_ = participant_.MakeReader<msg::Target>(
-        bench_id_, [this](const msg::Target& message, const auto& info) { OnTarget(message, info); });
-    states_ = participant_.MakeReader<msg::WaveplateState>(
-        bench_id_, [this](const msg::WaveplateState& message, const auto& info) { OnState(message, info); });
-    // The status reports the sample topic's missed deadlines: this reader requests it.
-    samples_ = participant_.MakeReader<msg::StokesSample>(
-        bench_id_, [this](const msg::StokesSample& message, const auto& info) { OnSample(message, info); },
-        bus::DeadlineWatch::kOn);
-    for (const std::string& line : bus::DescribeShmCleanup(participant_.shm_cleanup())) spdlog::info("{}", line);
+        maker_({common.domain_id, "dpc-controller/" + options.settings.controller_id,
+                {common.security_dir,
+                 common.identity.empty() ? "controller-" + options.settings.controller_id : common.identity}},
+               bus::DescribedPeerEvents(PeerLogger()), LogLine),
+        participant_(maker_.Make()) {
+    MakeWriters();
+    MakeReaders();
+    for (const std::string& line : bus::DescribeShmCleanup(participant_->shm_cleanup())) spdlog::info("{}", line);
     spdlog::info("law {}, priority {}, profiles {}, domain {}", MethodName(core_settings_.controller.method),
-                 core_settings_.priority, participant_.profiles_file(), common.domain_id);
+                 core_settings_.priority, participant_->profiles_file(), common.domain_id);
   }
 
-  ~ControllerService() override {
-    // The readers' callbacks use the core: they go first.
-    samples_.reset();
-    states_.reset();
-    targets_.reset();
-    devices_.reset();
-  }
+  ~ControllerService() override { DeleteReaders(); }
 
-  /// Publishes the status every --status-period-s until stop().
+  /// Publishes the status every --status-period-s until stop(); a reload (SIGHUP) is done here,
+  /// between two statuses.
   cli::ExitCode run() override {
     std::string last_condition;
     while (!WaitForStopFor(status_period_)) {
+      if (TakeReloadRequest()) Reload();
       std::lock_guard<std::mutex> lock(mutex_);
       const ControllerStatusReport status =
           core_.TakeStatus(MonotonicNs(), WallClockNs(), samples_->counters().deadline_misses.load());
@@ -111,6 +99,52 @@ class ControllerService final : public Service {
   }
 
  private:
+  /// The writers on participant_ (under mutex_, or before any reader exists).
+  void MakeWriters() {
+    command_writer_ = participant_->MakeWriter<msg::WaveplateCommand>(bench_id_, core_settings_.controller_id);
+    status_writer_ = participant_->MakeWriter<msg::ControllerStatus>(bench_id_);
+  }
+
+  /// Without mutex_ (the readers' callbacks take it; deleting a reader waits for its callback).
+  void DeleteReaders() {
+    samples_.reset();
+    states_.reset();
+    targets_.reset();
+    devices_.reset();
+  }
+
+  /// Without mutex_: the readers on participant_, after the writers (a sample's callback writes
+  /// the command).
+  void MakeReaders() {
+    devices_ = participant_->MakeReader<msg::DeviceDescription>(
+        bench_id_, [this](const msg::DeviceDescription& message, const auto& info) { OnDevice(message, info); });
+    targets_ = participant_->MakeReader<msg::Target>(
+        bench_id_, [this](const msg::Target& message, const auto& info) { OnTarget(message, info); });
+    states_ = participant_->MakeReader<msg::WaveplateState>(
+        bench_id_, [this](const msg::WaveplateState& message, const auto& info) { OnState(message, info); });
+    // The status reports the sample topic's missed deadlines: this reader requests it.
+    samples_ = participant_->MakeReader<msg::StokesSample>(
+        bench_id_, [this](const msg::StokesSample& message, const auto& info) { OnSample(message, info); },
+        bus::DeadlineWatch::kOn);
+  }
+
+  /// On the status loop's thread, without mutex_ (ParticipantMaker). The controller answers no
+  /// sample until its new readers are matched; the driver meanwhile treats it as silent.
+  void Reload() {
+    std::unique_ptr<bus::BusParticipant> fresh = maker_.Remake();
+    if (!fresh) return;
+    DeleteReaders();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      command_writer_.reset();
+      status_writer_.reset();
+      participant_ = std::move(fresh);  // the old participant goes
+      MakeWriters();
+    }
+    MakeReaders();
+    spdlog::info("reload (SIGHUP): the controller's endpoints are on the new participant");
+  }
+
   /// The core's settings: the options, and the scenario's controller and simulation sections
   /// (the scenario validated whole, as `dpc sim` does: ScenarioError).
   ControllerSettings Settings(const CommonOptions& common, const Options& options) {
@@ -207,7 +241,9 @@ class ControllerService final : public Service {
   SourceBinding driver_source_{kSourceReleaseNs};
   SourceBinding sample_source_{kSourceReleaseNs};
   LogLimiter log_;  ///< under mutex_ (the status loop holds it too)
-  bus::BusParticipant participant_;
+  bus::ParticipantMaker maker_;
+  /// Replaced only by Reload, while no reader exists.
+  std::unique_ptr<bus::BusParticipant> participant_;
   std::unique_ptr<bus::Writer<msg::WaveplateCommand>> command_writer_;
   std::unique_ptr<bus::Writer<msg::ControllerStatus>> status_writer_;
   std::unique_ptr<bus::Reader<msg::DeviceDescription>> devices_;

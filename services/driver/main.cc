@@ -18,6 +18,7 @@
 #include "dpc/bench/clock.h"
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/message_conversion.h"
+#include "dpc/bus/participant_maker.h"
 #include "dpc/config/scenario_builders.h"
 #include "dpc/config/scenario_validation.h"
 #include "driver_core.h"
@@ -89,62 +90,42 @@ class DriverService final : public Service {
         backend_(MakeBackend(scenario_, record_.get())),
         core_(scenario_.stages, WithDeviceRamps(options.settings, *backend_), backend_.get()),
         targets_(scenario_.target, TargetAuthority::EpochNow()),
-        participant_({common.domain_id, "dpc-driver/" + common.bench_id,
-                      {common.security_dir, common.identity.empty() ? "driver" : common.identity}},
-                     bus::DescribedPeerEvents(PeerLogger())),
-        state_writer_(participant_.MakeWriter<msg::WaveplateState>(bench_id_)),
-        device_writer_(participant_.MakeWriter<msg::DeviceDescription>(bench_id_)),
-        target_writer_(participant_.MakeWriter<msg::Target>(bench_id_)),
-        reply_writer_(participant_.MakeWriter<msg::TargetReply>(bench_id_)) {
-    device_writer_->Write(bus::DeviceMessage(
-        DeviceDescription{options.settings.driver_id, scenario_.stages, core_.max_slew_per_s(),
-                          WithDeviceRamps(options.settings, *backend_).max_ramp_s},
-        bench_id_));
+        device_message_(bus::DeviceMessage(
+            DeviceDescription{options.settings.driver_id, scenario_.stages, core_.max_slew_per_s(),
+                              WithDeviceRamps(options.settings, *backend_).max_ramp_s},
+            bench_id_)),
+        maker_({common.domain_id, "dpc-driver/" + common.bench_id,
+                {common.security_dir, common.identity.empty() ? "driver" : common.identity}},
+               bus::DescribedPeerEvents(PeerLogger()), LogLine),
+        participant_(maker_.Make()) {
     targets_revision_ = targets_.current().revision;
     first_target_ns_ = WallClockNs();  // (the source timestamp the other drivers see, near enough)
     started_monotonic_ns_ = MonotonicNs();
-    target_writer_->Write(bus::TargetMessage(targets_.current(), bench_id_));
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      Publish(core_.Publishable(WallClockNs()));
+      MakeWriters();
     }
-    // The driver's own record of the bench's samples: a command is judged by it (SampleTimeline).
-    samples_ = participant_.MakeReader<msg::StokesSample>(
-        bench_id_, [this](const msg::StokesSample& message, const fdds::SampleInfo& info) { OnSample(message, info); });
-    commands_ = participant_.MakeReader<msg::WaveplateCommand>(
-        bench_id_, [this](const msg::WaveplateCommand& message, const fdds::SampleInfo& info) {
-          OnCommand(message, participant_.WriterPartition(info.sample_identity.writer_guid()));
-        });
-    // Another driver on this bench: its target (TRANSIENT_LOCAL: a newcomer sees the one already
-    // there at once) comes from a writer of another participant. The driver that started
-    // later (a larger epoch in its revisions; ties: the larger participant GUID) leaves, but
-    // only while it is starting (kYieldWindowNs): a driver that has been driving never leaves
-    // on a peer's word, so a forged target claiming an earlier start cannot take the bench's
-    // driver away (it is logged as a second driver).
-    others_ = participant_.MakeReader<msg::Target>(
-        bench_id_, [this](const msg::Target& message, const fdds::SampleInfo& info) { OnTarget(message, info); });
-    requests_ = participant_.MakeReader<msg::TargetRequest>(
-        bench_id_, [this](const msg::TargetRequest& message, const auto&) { OnTargetRequest(message); });
-    for (const std::string& line : bus::DescribeShmCleanup(participant_.shm_cleanup())) spdlog::info("{}", line);
-    spdlog::info("{} controls, profiles {}, domain {}", core_.control_count(), participant_.profiles_file(),
+    MakeReaders();
+    for (const std::string& line : bus::DescribeShmCleanup(participant_->shm_cleanup())) spdlog::info("{}", line);
+    spdlog::info("{} controls, profiles {}, domain {}", core_.control_count(), participant_->profiles_file(),
                  common.domain_id);
   }
 
-  ~DriverService() override {
-    // The readers' callbacks use the core: they go first.
-    others_.reset();
-    commands_.reset();
-    requests_.reset();
-    samples_.reset();
-  }
+  ~DriverService() override { DeleteReaders(); }
 
   /// The ticker: wakes when the core's next deadline is due (a stand-in's wait, the obeyed
   /// controller's grace or silence timeout, the holding heartbeat), at most every --tick-s; a
   /// command that brings the deadline forward wakes it (WakeTickerIfSooner), and stop() at once.
+  /// A reload (SIGHUP) is done here, between two ticks.
   cli::ExitCode run() override {
     constexpr int64_t kMaxSleepNs = 5'000'000;
     std::unique_lock<std::mutex> lock(mutex_);
     while (!stopped()) {
+      if (TakeReloadRequest()) {
+        lock.unlock();
+        Reload();
+        lock.lock();
+      }
       const int64_t now_ns = MonotonicNs();
       core_.SetControllersConnected(commands_->counters().matched_writers.load(std::memory_order_relaxed));
       if (auto state = core_.Tick(now_ns, WallClockNs())) Publish(std::move(*state));
@@ -171,6 +152,68 @@ class DriverService final : public Service {
   }
 
  private:
+  /// Under mutex_: the writers on participant_, and what they always carry first: the device
+  /// description, the current target (both TRANSIENT_LOCAL: every newcomer gets them) and the
+  /// state.
+  void MakeWriters() {
+    state_writer_ = participant_->MakeWriter<msg::WaveplateState>(bench_id_);
+    device_writer_ = participant_->MakeWriter<msg::DeviceDescription>(bench_id_);
+    target_writer_ = participant_->MakeWriter<msg::Target>(bench_id_);
+    reply_writer_ = participant_->MakeWriter<msg::TargetReply>(bench_id_);
+    device_writer_->Write(device_message_);
+    target_writer_->Write(bus::TargetMessage(targets_.current(), bench_id_));
+    Publish(core_.Publishable(WallClockNs()));
+  }
+
+  /// Without mutex_ (the readers' callbacks take it; deleting a reader waits for its callback).
+  void DeleteReaders() {
+    others_.reset();
+    commands_.reset();
+    requests_.reset();
+    samples_.reset();
+  }
+
+  /// Without mutex_: the readers on participant_, after the writers (their callbacks write).
+  void MakeReaders() {
+    // The driver's own record of the bench's samples: a command is judged by it (SampleTimeline).
+    samples_ = participant_->MakeReader<msg::StokesSample>(
+        bench_id_, [this](const msg::StokesSample& message, const fdds::SampleInfo& info) { OnSample(message, info); });
+    commands_ = participant_->MakeReader<msg::WaveplateCommand>(
+        bench_id_, [this](const msg::WaveplateCommand& message, const fdds::SampleInfo& info) {
+          OnCommand(message, participant_->WriterPartition(info.sample_identity.writer_guid()));
+        });
+    // Another driver on this bench: its target (TRANSIENT_LOCAL: a newcomer sees the one already
+    // there at once) comes from a writer of another participant. The driver that started
+    // later (a larger epoch in its revisions; ties: the larger participant GUID) leaves, but
+    // only while it is starting (kYieldWindowNs): a driver that has been driving never leaves
+    // on a peer's word, so a forged target claiming an earlier start cannot take the bench's
+    // driver away (it is logged as a second driver).
+    others_ = participant_->MakeReader<msg::Target>(
+        bench_id_, [this](const msg::Target& message, const fdds::SampleInfo& info) { OnTarget(message, info); });
+    requests_ = participant_->MakeReader<msg::TargetRequest>(
+        bench_id_, [this](const msg::TargetRequest& message, const auto&) { OnTargetRequest(message); });
+  }
+
+  /// On the ticker's thread, without mutex_ (ParticipantMaker). No tick runs meanwhile and the
+  /// controllers' commands go nowhere until the new endpoints are matched: the waveplates stay
+  /// where they are; then the usual rules (silence, hold, failover) apply to what arrives.
+  void Reload() {
+    std::unique_ptr<bus::BusParticipant> fresh = maker_.Remake();
+    if (!fresh) return;
+    DeleteReaders();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      state_writer_.reset();
+      device_writer_.reset();
+      target_writer_.reset();
+      reply_writer_.reset();
+      participant_ = std::move(fresh);  // the old participant goes
+      MakeWriters();
+    }
+    MakeReaders();
+    spdlog::info("reload (SIGHUP): the driver's endpoints are on the new participant");
+  }
+
   static std::unique_ptr<DeviceRecord> MakeRecord(const CommonOptions& common, const Options& options,
                                                   const ScenarioConfig& scenario) {
     if (options.device_record == "none") return nullptr;
@@ -288,7 +331,7 @@ class DriverService final : public Service {
 
   void OnTarget(const msg::Target& message, const fdds::SampleInfo& info) {
     const auto writer = info.sample_identity.writer_guid();
-    const auto own = participant_.raw()->guid();
+    const auto own = participant_->raw()->guid();
     if (writer.guidPrefix == own.guidPrefix) return;
     const uint64_t mine = EpochOf(targets_revision_.load());
     const uint64_t theirs = EpochOf(message.revision());
@@ -360,7 +403,10 @@ class DriverService final : public Service {
   RejectionLog rejections_{"rejected command"};
   SourceBinding sample_source_{kSourceReleaseNs};  ///< the polarimeter's participant; under mutex_
   LogLimiter log_;  ///< under mutex_
-  bus::BusParticipant participant_;
+  msg::DeviceDescription device_message_;  ///< written by every participant this driver makes
+  bus::ParticipantMaker maker_;
+  /// Replaced only by Reload, while no reader exists (the readers' callbacks use it).
+  std::unique_ptr<bus::BusParticipant> participant_;
   std::unique_ptr<bus::Writer<msg::WaveplateState>> state_writer_;
   std::unique_ptr<bus::Writer<msg::DeviceDescription>> device_writer_;
   std::unique_ptr<bus::Writer<msg::Target>> target_writer_;

@@ -11,38 +11,59 @@
 
 namespace dpc::services {
 
-DdsBenchLink::DdsBenchLink(bus::BusParticipant* participant, int control_count, const std::string& bench_id,
+DdsBenchLink::DdsBenchLink(bus::ParticipantMaker maker, int control_count, const std::string& bench_id,
                            double lockstep_timeout_s, double latency_warmup_s, double summary_hz,
                            const TargetConfig& target)
     : bench_id_(bench_id),
       control_count_(control_count),
       lockstep_timeout_s_(lockstep_timeout_s),
+      summary_hz_(summary_hz),
+      maker_(std::move(maker)),
+      participant_(maker_.Make()),
       summary_(target),
       latest_(WaveplateMotion::Still(ControlVector::Zero(control_count))),
       latency_(WallClockNs() + static_cast<int64_t>(latency_warmup_s * 1e9)) {
-  writer_ = participant->MakeWriter<msg::StokesSample>(bench_id);
   if (summary_hz > 0) {
+    summary_period_ns_ = static_cast<int64_t>(1e9 / summary_hz);
+    next_summary_ns_ = MonotonicNs() + summary_period_ns_;
+  }
+  MakeEndpoints();
+}
+
+DdsBenchLink::~DdsBenchLink() { DeleteEndpoints(); }
+
+void DdsBenchLink::MakeEndpoints() {
+  writer_ = participant_->MakeWriter<msg::StokesSample>(bench_id_);
+  if (summary_hz_ > 0) {
     try {
-      summary_writer_ = participant->MakeWriter<msg::BenchSummary>(bench_id);
-      summary_period_ns_ = static_cast<int64_t>(1e9 / summary_hz);
-      next_summary_ns_ = MonotonicNs() + summary_period_ns_;
+      summary_writer_ = participant_->MakeWriter<msg::BenchSummary>(bench_id_);
     } catch (const std::exception& e) {
       // Permissions signed before the topic existed: the bench runs, observers miss the summary.
       spdlog::warn("no dpc_bench_summary ({}); make-bench-pki.sh signs the permissions that grant it", e.what());
     }
   }
   // The bench's report counts the state topic's missed deadlines: this reader requests it.
-  states_ = participant->MakeReader<msg::WaveplateState>(
-      bench_id, [this](const msg::WaveplateState& state, const auto& info) { OnState(state, bus::SourceOf(info)); },
+  states_ = participant_->MakeReader<msg::WaveplateState>(
+      bench_id_, [this](const msg::WaveplateState& state, const auto& info) { OnState(state, bus::SourceOf(info)); },
       bus::DeadlineWatch::kOn);
-  targets_ = participant->MakeReader<msg::Target>(
-      bench_id, [this](const msg::Target& target, const auto& info) { OnTarget(target, bus::SourceOf(info)); });
+  targets_ = participant_->MakeReader<msg::Target>(
+      bench_id_, [this](const msg::Target& target, const auto& info) { OnTarget(target, bus::SourceOf(info)); });
 }
 
-DdsBenchLink::~DdsBenchLink() {
+void DdsBenchLink::DeleteEndpoints() {
   states_.reset();
   targets_.reset();
   summary_writer_.reset();
+  writer_.reset();
+}
+
+void DdsBenchLink::Reload() {
+  std::unique_ptr<bus::BusParticipant> fresh = maker_.Remake();
+  if (!fresh) return;
+  DeleteEndpoints();
+  participant_ = std::move(fresh);  // the old participant goes
+  MakeEndpoints();
+  spdlog::info("reload (SIGHUP): the polarimeter's endpoints are on the new participant");
 }
 
 void DdsBenchLink::WriteSample(const BenchSample& sample) {
@@ -51,6 +72,7 @@ void DdsBenchLink::WriteSample(const BenchSample& sample) {
 }
 
 void DdsBenchLink::Publish(const BenchSample& sample) {
+  if (reload_requested_.exchange(false)) Reload();
   WriteSample(sample);
   if (!summary_writer_) return;
   const int64_t now_ns = MonotonicNs();

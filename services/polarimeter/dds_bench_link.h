@@ -14,6 +14,7 @@
 #include "bench_core.h"
 #include "dpc/bench/bench_summary.h"
 #include "dpc/bus/bus_participant.h"
+#include "dpc/bus/participant_maker.h"
 #include "log_limiter.h"
 #include "loop_latency.h"
 #include "service_runtime.h"
@@ -22,11 +23,12 @@ namespace dpc::services {
 
 class DdsBenchLink final : public BenchLink {
  public:
-  /// Lockstep: gives up on a sample no state answers within `lockstep_timeout_s`. The loop
-  /// latency counts samples published from `latency_warmup_s` on. Every 1/`summary_hz` s (0:
-  /// never) a BenchSummary of what it saw goes to dpc_bench_summary, starting from `target`.
-  DdsBenchLink(bus::BusParticipant* participant, int control_count, const std::string& bench_id,
-               double lockstep_timeout_s, double latency_warmup_s, double summary_hz, const TargetConfig& target);
+  /// On a participant `maker` makes (now, and again on RequestReload). Lockstep: gives up on a
+  /// sample no state answers within `lockstep_timeout_s`. The loop latency counts samples
+  /// published from `latency_warmup_s` on. Every 1/`summary_hz` s (0: never) a BenchSummary of
+  /// what it saw goes to dpc_bench_summary, starting from `target`.
+  DdsBenchLink(bus::ParticipantMaker maker, int control_count, const std::string& bench_id, double lockstep_timeout_s,
+               double latency_warmup_s, double summary_hz, const TargetConfig& target);
   ~DdsBenchLink() override;
 
   void Publish(const BenchSample& sample) override;
@@ -37,6 +39,10 @@ class DdsBenchLink final : public BenchLink {
 
   /// Thread-safe: the bench stops at its next sample; a lockstep wait ends at once.
   void Stop();
+  /// Thread-safe (SIGHUP): the next Publish makes the participant and the endpoints again
+  /// (bus::ParticipantMaker); the bench's loop pauses for that long.
+  void RequestReload() { reload_requested_.store(true); }
+  const bus::BusParticipant& participant() const { return *participant_; }
 
   uint64_t rejected_states() const;
   /// The loop latency seen in the states so far (see LoopLatencyRecorder).
@@ -46,6 +52,12 @@ class DdsBenchLink final : public BenchLink {
  private:
   /// Puts one sample on the bus (Publish, and AwaitAnswer's re-publications).
   void WriteSample(const BenchSample& sample);
+  /// The endpoints on participant_ (on the bench's thread, without mutex_: the readers' callbacks
+  /// take it).
+  void MakeEndpoints();
+  void DeleteEndpoints();
+  /// On the bench's thread: a new participant (kept only if it can be made) and new endpoints.
+  void Reload();
   void OnState(const msg::WaveplateState& message, const SourceId& source);
   void OnTarget(const msg::Target& message, const SourceId& source);
   /// Whether `source` is the bench's driver (SourceBinding); else logs the refusal. Under mutex_.
@@ -55,6 +67,10 @@ class DdsBenchLink final : public BenchLink {
   int control_count_;
   double lockstep_timeout_s_;
   std::atomic<bool> stopped_{false};
+  std::atomic<bool> reload_requested_{false};
+  double summary_hz_;
+  bus::ParticipantMaker maker_;
+  std::unique_ptr<bus::BusParticipant> participant_;  ///< replaced only by Reload
   msg::StokesSample sample_message_;  ///< written in place (Publish runs on the bench's thread)
   std::unique_ptr<bus::Writer<msg::StokesSample>> writer_;
   // The summary: folded under mutex_, written on the bench's thread when due.

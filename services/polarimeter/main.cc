@@ -146,13 +146,14 @@ class PolarimeterService final : public Service {
   PolarimeterService(const CommonOptions& common, const Options& options)
       : options_(options),
         bench_(LoadPolarimeterScenario(common, options), WithProgressLog(options).bench),  // validates: ScenarioError
-        participant_({common.domain_id, "dpc-polarimeter/" + common.bench_id,
-                      {common.security_dir, common.identity.empty() ? "polarimeter" : common.identity}},
-                     bus::DescribedPeerEvents(PeerLogger())),
+
         // The loop latency is counted, like the error, once the loop has settled: in real time
         // from --settle-s into the run (the first samples meet a controller re-joining and
         // processes touching fresh pages: single stalls of several ms); in lockstep from the start.
-        link_(&participant_, bench_.control_count(), common.bench_id, options.lockstep_timeout_s,
+        link_(bus::ParticipantMaker({common.domain_id, "dpc-polarimeter/" + common.bench_id,
+                                     {common.security_dir, common.identity.empty() ? "polarimeter" : common.identity}},
+                                    bus::DescribedPeerEvents(PeerLogger()), LogLine),
+              bench_.control_count(), common.bench_id, options.lockstep_timeout_s,
               options.bench.lockstep ? 0.0 : options.bench.settle_s, options.summary_hz,
               bench_.scenario().target) {
     if (bench_.scenario().polarimeter_device) {
@@ -174,10 +175,12 @@ class PolarimeterService final : public Service {
           TraceHeaderLines(bench_.scenario(), bench_.chain(), bench_.target(), 1,
                            "dpc-polarimeter " + std::string(options.bench.lockstep ? "lockstep" : "real time")));
     }
-    for (const std::string& line : bus::DescribeShmCleanup(participant_.shm_cleanup())) spdlog::info("{}", line);
+    for (const std::string& line : bus::DescribeShmCleanup(link_.participant().shm_cleanup())) {
+      spdlog::info("{}", line);
+    }
     spdlog::info("{}, {} controls, profiles {}, domain {}",
                  options.bench.lockstep ? "lockstep" : fmt::format("real time at {} Hz", options.bench.rate_hz),
-                 bench_.control_count(), participant_.profiles_file(), common.domain_id);
+                 bench_.control_count(), link_.participant().profiles_file(), common.domain_id);
   }
 
   cli::ExitCode run() override {
@@ -237,10 +240,10 @@ class PolarimeterService final : public Service {
 
  private:
   void OnStop() override { link_.Stop(); }
+  void OnReloadRequested() override { link_.RequestReload(); }
 
   Options options_;
   BenchCore bench_;
-  bus::BusParticipant participant_;
   DdsBenchLink link_;
   std::unique_ptr<TraceWriter> trace_;
   std::unique_ptr<InstrumentPolarimeter> instrument_;  ///< a real polarimeter, if the scenario has one

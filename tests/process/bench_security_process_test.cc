@@ -6,6 +6,7 @@
 // bench keeps locking. Domain 48; loopback only.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -14,7 +15,9 @@
 #include <fstream>
 #include <functional>
 #include <memory>
+#include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <tuple>
@@ -225,6 +228,129 @@ TEST_F(BenchSecurityTest, NoOneWithoutTheBenchsCredentialsOrTheRightPermissionIs
   // so that main stays obeyed).
   EXPECT_GT(Attack<msg::WaveplateCommand>({g_pki, "controller-standby"}, "standby", Spoof("standby", -5), &how), 0)
       << "the legitimate standby: " << how;
+}
+
+/// The running service whose log is `name`.log (the fixture's restart after a handshake stall
+/// is `name`_restarted).
+Process& Service(std::vector<std::unique_ptr<Process>>& processes, const std::string& name) {
+  Process* found = nullptr;
+  for (auto& p : processes) {
+    const std::string stem = p->out_path().stem().string();
+    if (stem == name || stem == name + "_restarted") found = p.get();
+  }
+  if (found == nullptr) throw std::runtime_error("no process " + name);
+  return *found;
+}
+
+/// How many samples the observer saw answered by states applying a command of `id` (a holding
+/// driver's heartbeats repeat the last one: not counted again).
+size_t SamplesAnsweredBy(const std::vector<dpc::testing::SeenState>& states, const std::string& id) {
+  std::set<uint64_t> samples;
+  for (const auto& s : states) {
+    if (s.state.answers_sample() > 0 && s.state.applied_controller_id().to_string() == id) {
+      samples.insert(s.state.answers_sample());
+    }
+  }
+  return samples.size();
+}
+
+/// How many times `text` is in `log`.
+size_t Count(const std::string& log, const std::string& text) {
+  size_t n = 0;
+  for (size_t at = log.find(text); at != std::string::npos; at = log.find(text, at + 1)) ++n;
+  return n;
+}
+
+// Credentials rotated while the bench runs: with --keep-replaced the old certificates stay valid
+// while each service, on SIGHUP, makes its participant again with its new identity; then
+// --revoke-replaced and a second SIGHUP each load the revocation list. No service restarts, the
+// bench keeps locking after each reload, and a participant holding a replaced certificate is
+// refused by every service (before reloads, a driver that started before a rotation obeyed it).
+// Credentials that do not give a participant (a tampered grant) are refused by the reload and
+// the running participant is kept.
+TEST_F(BenchSecurityTest, RotatedCredentialsTakeEffectOnSighupWithoutARestart) {
+  const std::string script = std::string(DPC_SOURCE_DIR) + "/deploy/security/make-bench-pki.sh";
+  Process& driver = Service(processes_, "driver");
+  Process& controller = Service(processes_, "controller_main");
+  Process& polarimeter = Service(processes_, "polarimeter");
+  const std::string reloaded = "endpoints are on the new participant";
+  // Each reload: the service says it moved, and the bench locks again under main.
+  const auto reload = [&](Process& service, const char* what) {
+    const size_t before = Count(service.Log(), reloaded);
+    const size_t answered = SamplesAnsweredBy(States(), "main");
+    const int64_t sent_ns = MonotonicNs();
+    service.Signal(SIGHUP);
+    ASSERT_TRUE(Eventually([&] { return Count(service.Log(), reloaded) > before; }, 20s))
+        << what << " did not reload\n" << Logs();
+    ASSERT_TRUE(Eventually([&] { return SamplesAnsweredBy(States(), "main") > answered + 200; }, 30s))
+        << "the bench did not lock again after the " << what << "'s reload\n" << Logs();
+    // The longest pause, from the signal on, between main's commands applied to new samples
+    // (states answering a later sample than any before; as the observer received them).
+    int64_t longest_ns = 0, last_ns = sent_ns;
+    uint64_t newest_sample = 0;
+    for (const auto& s : States()) {
+      if (s.state.answers_sample() <= newest_sample || s.state.applied_controller_id().to_string() != "main") {
+        continue;
+      }
+      newest_sample = s.state.answers_sample();
+      if (s.seen_ns < sent_ns) continue;
+      longest_ns = std::max(longest_ns, s.seen_ns - last_ns);
+      last_ns = s.seen_ns;
+    }
+    std::printf("reload of the %-12s longest pause between main's commands applied: %.0f ms\n", what,
+                longest_ns * 1e-6);
+    EXPECT_TRUE(service.running()) << what << " exited";
+  };
+
+  // A reload that cannot make a participant (the driver's grant no longer matches its
+  // signature) is refused; the bench goes on as it was.
+  const fs::path grant = fs::path(g_pki) / "driver" / "permissions.p7s";
+  const fs::path saved = fs::path(g_pki) / "driver" / "permissions.p7s.saved";
+  fs::copy_file(grant, saved, fs::copy_options::overwrite_existing);
+  ASSERT_TRUE(TamperedCopy(g_pki, g_pki + ".tampered", "driver/permissions.p7s", "dpc.bench1", "dpc.benchX"));
+  fs::copy_file(fs::path(g_pki + ".tampered") / "driver" / "permissions.p7s", grant,
+                fs::copy_options::overwrite_existing);
+  {
+    const size_t answered = SamplesAnsweredBy(States(), "main");
+    driver.Signal(SIGHUP);
+    EXPECT_TRUE(Eventually([&] { return driver.Log().find("reload (SIGHUP) refused") != std::string::npos; }, 20s))
+        << driver.Log();
+    EXPECT_TRUE(Eventually([&] { return SamplesAnsweredBy(States(), "main") > answered + 500; }, 20s)) << Logs();
+    EXPECT_EQ(Count(driver.Log(), reloaded), 0u);
+  }
+  fs::copy_file(saved, grant, fs::copy_options::overwrite_existing);
+
+  // Phase 1: new identities, the old ones still valid; every service moves to its new one.
+  const std::string before_rotation = g_pki + ".before_rotation";
+  fs::remove_all(before_rotation);
+  fs::copy(g_pki, before_rotation, fs::copy_options::recursive);
+  ASSERT_TRUE(Shell(script + " --out " + g_pki + " --rotate --keep-replaced"));
+  reload(polarimeter, "polarimeter");
+  reload(controller, "controller");
+  reload(driver, "driver");
+  RestartObserver({g_pki, "observer"});
+  // Phase 2: the replaced certificates revoked; every service loads the list.
+  ASSERT_TRUE(Shell(script + " --out " + g_pki + " --revoke-replaced"));
+  reload(polarimeter, "polarimeter");
+  reload(controller, "controller");
+  reload(driver, "driver");
+
+  // A copy of a replaced key is useless now: the old standby identity, commanding with a
+  // priority that would win, is matched by no service. The new one is (a low priority).
+  std::string how;
+  EXPECT_EQ(Attack<msg::WaveplateCommand>({before_rotation, "controller-standby"}, "standby", Spoof("standby"), &how),
+            0)
+      << "a replaced certificate: " << how;
+  std::printf("%-60s %s\n", "a replaced (revoked) certificate commanding", how.c_str());
+  for (const auto& s : States()) {
+    for (double v : s.state.phi_applied()) ASSERT_NE(v, 0.9) << "the replaced certificate's command was applied";
+  }
+  EXPECT_TRUE(SoonObeys("main")) << LatestState()->reason().to_string();
+  EXPECT_GT(Attack<msg::WaveplateCommand>({g_pki, "controller-standby"}, "standby", Spoof("standby", -5), &how), 0)
+      << "the rotated standby: " << how;
+  for (Process* p : {&driver, &controller, &polarimeter}) {
+    EXPECT_EQ(Count(p->Log(), reloaded), 2u) << p->out_path();
+  }
 }
 
 TEST_F(BenchSecurityTest, AParticipantWithoutCredentialsSeesNothing) {

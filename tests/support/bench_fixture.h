@@ -94,6 +94,15 @@ class BenchFixture : public ::testing::Test {
           statuses_seen_[status.controller_id().to_string()] = status;
         });
   }
+  /// The test's participant made again with `security` (e.g. rotated credentials); what it saw
+  /// so far is kept.
+  void RestartObserver(bus::SecurityOptions security = {}) {
+    statuses_.reset();
+    samples_.reset();
+    states_.reset();
+    participant_.reset();
+    StartObserver(domain_, std::move(security));
+  }
   void TearDown() override {
     processes_.clear();  // ends them (SIGINT, then SIGKILL)
     statuses_.reset();

@@ -1,0 +1,57 @@
+#pragma once
+// A service's DDS participant, made from its options at start and made again on SIGHUP
+// (services/common/service.h, Service::RequestReload): DDS Security credentials rotated by
+// make-bench-pki.sh (new keys, certificates, grants, the revocation list) take effect without a
+// restart, since Fast DDS 2.9 reads them only when a participant is created.
+//
+// A reload makes the new participant first, while the old one still runs: credentials or
+// profiles that do not give a participant (a tampered grant, a missing key, a broken profile)
+// are refused and the service keeps running on the participant it has. Only then does the
+// service delete its endpoints (readers first: their callbacks end before anything they use
+// goes), the old participant, and make its endpoints again on the new one.
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <utility>
+
+#include "dpc/bus/bus_participant.h"
+
+namespace dpc::bus {
+
+class ParticipantMaker {
+ public:
+  /// A line for the service's log: an error, or information.
+  using Log = std::function<void(bool error, const std::string& text)>;
+
+  ParticipantMaker(BusOptions options, std::function<void(const PeerEvent&)> on_peer, Log log)
+      : options_(std::move(options)), on_peer_(std::move(on_peer)), log_(std::move(log)) {}
+
+  /// At start: throws as BusParticipant does (the service cannot start).
+  std::unique_ptr<BusParticipant> Make() const { return std::make_unique<BusParticipant>(options_, on_peer_); }
+
+  /// For a reload: the new participant, or nullptr when it cannot be made (logged as an error
+  /// naming the reason; the caller keeps its participant).
+  std::unique_ptr<BusParticipant> Remake() const {
+    const std::string credentials =
+        options_.security.enabled()
+            ? "identity " + options_.security.identity + " of " + options_.security.directory
+            : std::string("no DDS Security");
+    try {
+      auto participant = Make();
+      log_(false, "reload (SIGHUP): a new participant (" + credentials + "); its endpoints follow");
+      return participant;
+    } catch (const std::exception& e) {
+      log_(true, std::string("reload (SIGHUP) refused, the running participant is kept: ") + e.what() + " (" +
+                     credentials + ")");
+      return nullptr;
+    }
+  }
+
+ private:
+  BusOptions options_;
+  std::function<void(const PeerEvent&)> on_peer_;
+  Log log_;
+};
+
+}  // namespace dpc::bus
