@@ -347,6 +347,26 @@ TEST_F(DpcRecordTest, ARecorderKilledWithSigkillLeavesAFileReadUpToItsLastChunk)
   EXPECT_NE(info.out.find("dpc_stokes_sample"), std::string::npos) << info.out;
 }
 
+// SIGHUP (a closed terminal, or the reload signal sent to every process of a bench) stops the
+// recorder as SIGTERM does: exit 0 and a complete file.
+TEST_F(DpcRecordTest, ARecorderStoppedBySighupClosesACompleteFile) {
+  StartBench(92, 1000);
+  AwaitObeyed(92, "A");
+  const fs::path file = dir_ / "hangup.mcap";
+  Process& recorder = Start("record", {DPC_BINARY, "record", "-o", file.string(), "--domain", "92"});
+  ASSERT_TRUE(Eventually([&] { return recorder.err().find("2 s,") != std::string::npos; }, 30s)) << recorder.err();
+  recorder.Signal(SIGHUP);
+  const auto code = recorder.Wait(20s);
+  ASSERT_TRUE(code.has_value()) << recorder.err();
+  EXPECT_EQ(*code, 0) << recorder.err();
+  const Recording r = ReadRecording(file);
+  EXPECT_TRUE(r.read.complete) << r.read.problem;
+  ASSERT_TRUE(r.messages.count("dpc_stokes_sample"));
+  size_t samples = 0;
+  EXPECT_TRUE(EverySampleOnce(r.messages.at("dpc_stokes_sample"), &samples));
+  EXPECT_GE(samples, 500u);
+}
+
 TEST_F(DpcRecordTest, AReplayPublishesTheRecordedRateScaledAndRefusesADomainWithARunningBench) {
   StartBench(94, 500);
   AwaitObeyed(94, "A");

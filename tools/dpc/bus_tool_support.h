@@ -33,8 +33,10 @@ void AddBusToolOptions(CLI::App& command, BusToolOptions* options, const char* b
 /// The bench filter for bus::BusParticipant::MakeReader: "" (all benches) for "" or "*".
 std::string BenchFilter(const std::string& bench_id);
 
-/// While alive, SIGINT and SIGTERM set a flag instead of killing the process (and SIGPIPE is
-/// ignored, so that `dpc topic echo … | head` ends cleanly too). Restores the old handlers.
+/// While alive, SIGINT, SIGTERM and SIGHUP (a closed terminal, or a reload signal sent to the
+/// whole bench) set a flag instead of killing the process, so that a recording is closed
+/// properly; SIGPIPE is ignored, so that `dpc topic echo … | head` ends cleanly too. Restores
+/// the old handlers.
 class StopSignals {
  public:
   StopSignals();
@@ -42,12 +44,13 @@ class StopSignals {
   StopSignals(const StopSignals&) = delete;
   StopSignals& operator=(const StopSignals&) = delete;
 
-  /// True once SIGINT or SIGTERM arrived.
+  /// True once SIGINT, SIGTERM or SIGHUP arrived.
   static bool requested();
 
  private:
   struct sigaction old_int_ {};
   struct sigaction old_term_ {};
+  struct sigaction old_hup_ {};
   struct sigaction old_pipe_ {};
 };
 
