@@ -47,8 +47,14 @@ SignalWatcher::~SignalWatcher() {
 }
 
 void SignalWatcher::Watch(Service* service) {
+  std::lock_guard<std::mutex> lock(mutex_);
   service_ = service;
   if (signal_.load() != 0) service->stop();
+}
+
+void SignalWatcher::Unwatch() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  service_ = nullptr;
 }
 
 void SignalWatcher::Loop() {
@@ -60,16 +66,17 @@ void SignalWatcher::Loop() {
       if (quitting_.load()) return;
       continue;  // someone else's SIGUSR1: not ours to act on
     }
+    std::lock_guard<std::mutex> lock(mutex_);
     if (signal == SIGHUP) {
-      if (Service* service = service_.load()) {
-        service->RequestReload();
+      if (service_ != nullptr) {
+        service_->RequestReload();
       } else {
-        spdlog::warn("SIGHUP before the service started: nothing to reload yet");
+        spdlog::warn("SIGHUP while no service runs: nothing to reload");
       }
       continue;
     }
     signal_ = signal;
-    if (Service* service = service_.load()) service->stop();
+    if (service_ != nullptr) service_->stop();
   }
 }
 

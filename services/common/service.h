@@ -104,13 +104,17 @@ class SignalWatcher {
 
   /// From now on a signal stops `service`; one that came before stops it at once.
   void Watch(Service* service);
+  /// From now on signals reach no service (before it is destroyed: a signal being handled is
+  /// finished first).
+  void Unwatch();
   /// The signal that stopped the service (0: none).
   int signal() const { return signal_.load(); }
 
  private:
   void Loop();
 
-  std::atomic<Service*> service_{nullptr};
+  std::mutex mutex_;  ///< service_ and the calls into it
+  Service* service_ = nullptr;
   std::atomic<int> signal_{0};
   std::atomic<bool> quitting_{false};
   std::thread thread_;
@@ -170,6 +174,7 @@ int ServiceMain(int argc, char** argv, const std::string& description) {
     code = cli::ExitCode::kRuntimeError;
   }
   if (signals.signal() != 0) spdlog::info("stopped on signal {}", signals.signal());
+  signals.Unwatch();
   service.reset();  // entities before participant, before the watcher goes
   return cli::ToInt(code);
 }
