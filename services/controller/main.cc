@@ -68,21 +68,24 @@ class ControllerService final : public Service {
                  common.identity.empty() ? "controller-" + options.settings.controller_id : common.identity}},
                bus::DescribedPeerEvents(PeerLogger()), LogLine),
         participant_(maker_.Make()) {
-    MakeWriters();
-    MakeReaders();
+    MakeEndpoints();
     for (const std::string& line : bus::DescribeShmCleanup(participant_->shm_cleanup())) spdlog::info("{}", line);
     spdlog::info("law {}, priority {}, profiles {}, domain {}", MethodName(core_settings_.controller.method),
                  core_settings_.priority, participant_->profiles_file(), common.domain_id);
   }
 
-  ~ControllerService() override { DeleteReaders(); }
+  ~ControllerService() override { DeleteEndpoints(); }
 
   /// Publishes the status every --status-period-s until stop(); a reload (SIGHUP) is done here,
   /// between two statuses.
   cli::ExitCode run() override {
     std::string last_condition;
     while (!WaitForStopFor(status_period_)) {
-      if (TakeReloadRequest()) Reload();
+      // The controller answers no sample until its new readers are matched; the driver
+      // meanwhile treats it as silent.
+      if (TakeReloadRequest()) {
+        maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); });
+      }
       std::lock_guard<std::mutex> lock(mutex_);
       const ControllerStatusReport status =
           core_.TakeStatus(MonotonicNs(), WallClockNs(), samples_->counters().deadline_misses.load());
@@ -99,23 +102,11 @@ class ControllerService final : public Service {
   }
 
  private:
-  /// The writers on participant_ (under mutex_, or before any reader exists).
-  void MakeWriters() {
+  /// On the status loop's thread, without mutex_ (the readers' callbacks take it): the writers on
+  /// participant_, then the readers (a sample's callback writes the command).
+  void MakeEndpoints() {
     command_writer_ = participant_->MakeWriter<msg::WaveplateCommand>(bench_id_, core_settings_.controller_id);
     status_writer_ = participant_->MakeWriter<msg::ControllerStatus>(bench_id_);
-  }
-
-  /// Without mutex_ (the readers' callbacks take it; deleting a reader waits for its callback).
-  void DeleteReaders() {
-    samples_.reset();
-    states_.reset();
-    targets_.reset();
-    devices_.reset();
-  }
-
-  /// Without mutex_: the readers on participant_, after the writers (a sample's callback writes
-  /// the command).
-  void MakeReaders() {
     devices_ = participant_->MakeReader<msg::DeviceDescription>(
         bench_id_, [this](const msg::DeviceDescription& message, const auto& info) { OnDevice(message, info); });
     targets_ = participant_->MakeReader<msg::Target>(
@@ -128,21 +119,15 @@ class ControllerService final : public Service {
         bus::DeadlineWatch::kOn);
   }
 
-  /// On the status loop's thread, without mutex_ (ParticipantMaker). The controller answers no
-  /// sample until its new readers are matched; the driver meanwhile treats it as silent.
-  void Reload() {
-    std::unique_ptr<bus::BusParticipant> fresh = maker_.Remake();
-    if (!fresh) return;
-    DeleteReaders();
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      command_writer_.reset();
-      status_writer_.reset();
-      participant_ = std::move(fresh);  // the old participant goes
-      MakeWriters();
-    }
-    MakeReaders();
-    spdlog::info("reload (SIGHUP): the controller's endpoints are on the new participant");
+  /// Without mutex_: the readers first (their callbacks take it and use the core and the
+  /// command writer; deleting a reader waits for its callback), then the writers.
+  void DeleteEndpoints() {
+    samples_.reset();
+    states_.reset();
+    targets_.reset();
+    devices_.reset();
+    command_writer_.reset();
+    status_writer_.reset();
   }
 
   /// The core's settings: the options, and the scenario's controller and simulation sections
@@ -242,7 +227,7 @@ class ControllerService final : public Service {
   SourceBinding sample_source_{kSourceReleaseNs};
   LogLimiter log_;  ///< under mutex_ (the status loop holds it too)
   bus::ParticipantMaker maker_;
-  /// Replaced only by Reload, while no reader exists.
+  /// Replaced only by a reload, while no reader exists.
   std::unique_ptr<bus::BusParticipant> participant_;
   std::unique_ptr<bus::Writer<msg::WaveplateCommand>> command_writer_;
   std::unique_ptr<bus::Writer<msg::ControllerStatus>> status_writer_;

@@ -101,17 +101,13 @@ class DriverService final : public Service {
     targets_revision_ = targets_.current().revision;
     first_target_ns_ = WallClockNs();  // (the source timestamp the other drivers see, near enough)
     started_monotonic_ns_ = MonotonicNs();
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      MakeWriters();
-    }
-    MakeReaders();
+    MakeEndpoints();
     for (const std::string& line : bus::DescribeShmCleanup(participant_->shm_cleanup())) spdlog::info("{}", line);
     spdlog::info("{} controls, profiles {}, domain {}", core_.control_count(), participant_->profiles_file(),
                  common.domain_id);
   }
 
-  ~DriverService() override { DeleteReaders(); }
+  ~DriverService() override { DeleteEndpoints(); }
 
   /// The ticker: wakes when the core's next deadline is due (a stand-in's wait, the obeyed
   /// controller's grace or silence timeout, the holding heartbeat), at most every --tick-s; a
@@ -122,8 +118,11 @@ class DriverService final : public Service {
     std::unique_lock<std::mutex> lock(mutex_);
     while (!stopped()) {
       if (TakeReloadRequest()) {
+        // No tick runs meanwhile and the controllers' commands go nowhere until the new
+        // endpoints are matched: the waveplates stay where they are; then the usual rules
+        // (silence, hold, failover) apply to what arrives.
         lock.unlock();
-        Reload();
+        maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); });
         lock.lock();
       }
       const int64_t now_ns = MonotonicNs();
@@ -152,29 +151,20 @@ class DriverService final : public Service {
   }
 
  private:
-  /// Under mutex_: the writers on participant_, and what they always carry first: the device
-  /// description, the current target (both TRANSIENT_LOCAL: every newcomer gets them) and the
-  /// state.
-  void MakeWriters() {
-    state_writer_ = participant_->MakeWriter<msg::WaveplateState>(bench_id_);
-    device_writer_ = participant_->MakeWriter<msg::DeviceDescription>(bench_id_);
-    target_writer_ = participant_->MakeWriter<msg::Target>(bench_id_);
-    reply_writer_ = participant_->MakeWriter<msg::TargetReply>(bench_id_);
-    device_writer_->Write(device_message_);
-    target_writer_->Write(bus::TargetMessage(targets_.current(), bench_id_));
-    Publish(core_.Publishable(WallClockNs()));
-  }
-
-  /// Without mutex_ (the readers' callbacks take it; deleting a reader waits for its callback).
-  void DeleteReaders() {
-    others_.reset();
-    commands_.reset();
-    requests_.reset();
-    samples_.reset();
-  }
-
-  /// Without mutex_: the readers on participant_, after the writers (their callbacks write).
-  void MakeReaders() {
+  /// Without mutex_ (the readers' callbacks take it): the writers on participant_, and what they
+  /// always carry first: the device description, the current target (both TRANSIENT_LOCAL:
+  /// every newcomer gets them) and the state; then the readers (their callbacks write).
+  void MakeEndpoints() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      state_writer_ = participant_->MakeWriter<msg::WaveplateState>(bench_id_);
+      device_writer_ = participant_->MakeWriter<msg::DeviceDescription>(bench_id_);
+      target_writer_ = participant_->MakeWriter<msg::Target>(bench_id_);
+      reply_writer_ = participant_->MakeWriter<msg::TargetReply>(bench_id_);
+      device_writer_->Write(device_message_);
+      target_writer_->Write(bus::TargetMessage(targets_.current(), bench_id_));
+      Publish(core_.Publishable(WallClockNs()));
+    }
     // The driver's own record of the bench's samples: a command is judged by it (SampleTimeline).
     samples_ = participant_->MakeReader<msg::StokesSample>(
         bench_id_, [this](const msg::StokesSample& message, const fdds::SampleInfo& info) { OnSample(message, info); });
@@ -194,24 +184,18 @@ class DriverService final : public Service {
         bench_id_, [this](const msg::TargetRequest& message, const auto&) { OnTargetRequest(message); });
   }
 
-  /// On the ticker's thread, without mutex_ (ParticipantMaker). No tick runs meanwhile and the
-  /// controllers' commands go nowhere until the new endpoints are matched: the waveplates stay
-  /// where they are; then the usual rules (silence, hold, failover) apply to what arrives.
-  void Reload() {
-    std::unique_ptr<bus::BusParticipant> fresh = maker_.Remake();
-    if (!fresh) return;
-    DeleteReaders();
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      state_writer_.reset();
-      device_writer_.reset();
-      target_writer_.reset();
-      reply_writer_.reset();
-      participant_ = std::move(fresh);  // the old participant goes
-      MakeWriters();
-    }
-    MakeReaders();
-    spdlog::info("reload (SIGHUP): the driver's endpoints are on the new participant");
+  /// Without mutex_: the readers first (their callbacks take it and use the core and the
+  /// writers; deleting a reader waits for its callback), then the writers.
+  void DeleteEndpoints() {
+    others_.reset();
+    commands_.reset();
+    requests_.reset();
+    samples_.reset();
+    std::lock_guard<std::mutex> lock(mutex_);
+    state_writer_.reset();
+    device_writer_.reset();
+    target_writer_.reset();
+    reply_writer_.reset();
   }
 
   static std::unique_ptr<DeviceRecord> MakeRecord(const CommonOptions& common, const Options& options,
@@ -405,7 +389,7 @@ class DriverService final : public Service {
   LogLimiter log_;  ///< under mutex_
   msg::DeviceDescription device_message_;  ///< written by every participant this driver makes
   bus::ParticipantMaker maker_;
-  /// Replaced only by Reload, while no reader exists (the readers' callbacks use it).
+  /// Replaced only by a reload, while no reader exists (the readers' callbacks use it).
   std::unique_ptr<bus::BusParticipant> participant_;
   std::unique_ptr<bus::Writer<msg::WaveplateState>> state_writer_;
   std::unique_ptr<bus::Writer<msg::DeviceDescription>> device_writer_;

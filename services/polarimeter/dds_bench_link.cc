@@ -57,22 +57,15 @@ void DdsBenchLink::DeleteEndpoints() {
   writer_.reset();
 }
 
-void DdsBenchLink::Reload() {
-  std::unique_ptr<bus::BusParticipant> fresh = maker_.Remake();
-  if (!fresh) return;
-  DeleteEndpoints();
-  participant_ = std::move(fresh);  // the old participant goes
-  MakeEndpoints();
-  spdlog::info("reload (SIGHUP): the polarimeter's endpoints are on the new participant");
-}
-
 void DdsBenchLink::WriteSample(const BenchSample& sample) {
   bus::WriteSample(sample, bench_id_, &sample_message_);
   writer_->Write(sample_message_);
 }
 
 void DdsBenchLink::Publish(const BenchSample& sample) {
-  if (reload_requested_.exchange(false)) Reload();
+  if (reload_requested_.exchange(false)) {
+    maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); });
+  }
   WriteSample(sample);
   if (!summary_writer_) return;
   const int64_t now_ns = MonotonicNs();

@@ -56,8 +56,6 @@ class DdsBenchLink final : public BenchLink {
   /// take it).
   void MakeEndpoints();
   void DeleteEndpoints();
-  /// On the bench's thread: a new participant (kept only if it can be made) and new endpoints.
-  void Reload();
   void OnState(const msg::WaveplateState& message, const SourceId& source);
   void OnTarget(const msg::Target& message, const SourceId& source);
   /// Whether `source` is the bench's driver (SourceBinding); else logs the refusal. Under mutex_.
@@ -70,7 +68,7 @@ class DdsBenchLink final : public BenchLink {
   std::atomic<bool> reload_requested_{false};
   double summary_hz_;
   bus::ParticipantMaker maker_;
-  std::unique_ptr<bus::BusParticipant> participant_;  ///< replaced only by Reload
+  std::unique_ptr<bus::BusParticipant> participant_;  ///< replaced only by a reload (Publish)
   msg::StokesSample sample_message_;  ///< written in place (Publish runs on the bench's thread)
   std::unique_ptr<bus::Writer<msg::StokesSample>> writer_;
   // The summary: folded under mutex_, written on the bench's thread when due.

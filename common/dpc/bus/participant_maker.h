@@ -4,11 +4,11 @@
 // make-bench-pki.sh (new keys, certificates, grants, the revocation list) take effect without a
 // restart, since Fast DDS 2.9 reads them only when a participant is created.
 //
-// A reload makes the new participant first, while the old one still runs: credentials or
-// profiles that do not give a participant (a tampered grant, a missing key, a broken profile)
-// are refused and the service keeps running on the participant it has. Only then does the
-// service delete its endpoints (readers first: their callbacks end before anything they use
-// goes), the old participant, and make its endpoints again on the new one.
+// A reload (Reload) makes the new participant first, while the old one still runs: credentials
+// or profiles that do not give a participant (a tampered grant, a missing key, a broken profile)
+// are refused and the service keeps running on the participant it has. Only then are the
+// service's endpoints deleted (readers first: their callbacks end before anything they use
+// goes), the old participant replaced, and the endpoints made again on the new one.
 
 #include <functional>
 #include <memory>
@@ -30,22 +30,30 @@ class ParticipantMaker {
   /// At start: throws as BusParticipant does (the service cannot start).
   std::unique_ptr<BusParticipant> Make() const { return std::make_unique<BusParticipant>(options_, on_peer_); }
 
-  /// For a reload: the new participant, or nullptr when it cannot be made (logged as an error
-  /// naming the reason; the caller keeps its participant).
-  std::unique_ptr<BusParticipant> Remake() const {
+  /// A reload, on the thread that owns `*participant` (no reader's callback may use it while it
+  /// is replaced: `delete_endpoints` deletes the readers first). A new participant; if it cannot
+  /// be made, the error is logged and nothing changes (false). Else `delete_endpoints`, the old
+  /// participant replaced by the new one, `make_endpoints` (on it), and true.
+  bool Reload(std::unique_ptr<BusParticipant>* participant, const std::function<void()>& delete_endpoints,
+              const std::function<void()>& make_endpoints) const {
     const std::string credentials =
         options_.security.enabled()
             ? "identity " + options_.security.identity + " of " + options_.security.directory
             : std::string("no DDS Security");
+    std::unique_ptr<BusParticipant> fresh;
     try {
-      auto participant = Make();
-      log_(false, "reload (SIGHUP): a new participant (" + credentials + "); its endpoints follow");
-      return participant;
+      fresh = Make();
     } catch (const std::exception& e) {
       log_(true, std::string("reload (SIGHUP) refused, the running participant is kept: ") + e.what() + " (" +
                      credentials + ")");
-      return nullptr;
+      return false;
     }
+    log_(false, "reload (SIGHUP): a new participant (" + credentials + "); its endpoints follow");
+    delete_endpoints();
+    *participant = std::move(fresh);  // the old participant goes
+    make_endpoints();
+    log_(false, "reload (SIGHUP): the endpoints are on the new participant");
+    return true;
   }
 
  private:
