@@ -170,6 +170,24 @@ class BenchSecurityTest : public dpc::testing::BenchFixture {
     };
   }
 
+  /// The control of an attack: the standby identity of `pki`, commanding in its own partition
+  /// with a low priority (main stays obeyed), is matched by the driver; how many readers. A new
+  /// participant's handshake with the driver can stall for good (Fast DDS 2.9, see SetUp; seen
+  /// once in CI: 0 readers in 6 s): the remedy, a new participant, is tried at most twice more,
+  /// and said.
+  int StandbyMatched(const std::string& pki, std::string* how) {
+    int matched = 0;
+    for (int attempt = 0; attempt < 3 && matched == 0; ++attempt) {
+      if (attempt > 0) {
+        std::fprintf(stderr, "note: the standby matched no reader in 6 s (%s; a Fast DDS 2.9 handshake stall?); "
+                             "a new participant\n", how->c_str());
+      }
+      matched = Attack<msg::WaveplateCommand>({pki, "controller-standby"}, "standby", Spoof("standby", -5), how,
+                                              /*until_matched=*/true);
+    }
+    return matched;
+  }
+
   /// No state ever applied the attackers' φ, and the bench still follows main.
   void ExpectUntouched(size_t applied_before) {
     for (const auto& s : States()) {
@@ -231,10 +249,7 @@ TEST_F(BenchSecurityTest, NoOneWithoutTheBenchsCredentialsOrTheRightPermissionIs
   ExpectUntouched(applied_before);
   // The control: the standby's own identity, in its own partition, is matched (a low priority,
   // so that main stays obeyed).
-  EXPECT_GT(Attack<msg::WaveplateCommand>({g_pki, "controller-standby"}, "standby", Spoof("standby", -5), &how,
-                                          /*until_matched=*/true),
-            0)
-      << "the legitimate standby: " << how;
+  EXPECT_GT(StandbyMatched(g_pki, &how), 0) << "the legitimate standby: " << how;
 }
 
 /// The running service whose log is `name`.log (the fixture's restart after a handshake stall
@@ -365,10 +380,7 @@ TEST_F(BenchSecurityTest, RotatedCredentialsTakeEffectOnSighupWithoutARestart) {
     for (double v : s.state.phi_applied()) ASSERT_NE(v, 0.9) << "the replaced certificate's command was applied";
   }
   EXPECT_TRUE(SoonObeys("main")) << LatestState()->reason().to_string();
-  EXPECT_GT(Attack<msg::WaveplateCommand>({g_pki, "controller-standby"}, "standby", Spoof("standby", -5), &how,
-                                          /*until_matched=*/true),
-            0)
-      << "the rotated standby: " << how;
+  EXPECT_GT(StandbyMatched(g_pki, &how), 0) << "the rotated standby: " << how;
   for (Process* p : {&driver, &controller, &polarimeter}) {
     EXPECT_EQ(Count(p->Log(), reloaded), reloads[p]) << p->out_path();
   }
