@@ -4,6 +4,7 @@
 //
 //   dpc-controller [SCENARIO] [--id ID] [--priority P] [--method gp] [--step 0.5] …
 
+#include <atomic>
 #include <memory>
 #include <mutex>
 
@@ -85,6 +86,10 @@ class ControllerService final : public Service {
       // meanwhile treats it as silent.
       if (TakeReloadRequest()) {
         maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); });
+      } else if (maker_.HandshakeStalled(*participant_, MonotonicNs(), progress_ns_.load())) {
+        // Progress is a command written: it needs the driver's description and the
+        // polarimeter's samples, which a stalled handshake with either withholds.
+        maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); }, "handshake stall");
       }
       std::lock_guard<std::mutex> lock(mutex_);
       const ControllerStatusReport status =
@@ -208,6 +213,7 @@ class ControllerService final : public Service {
     } else if (const ControllerCommand* command = core_.OnSample(sample_, MonotonicNs(), wall_ns)) {
       bus::WriteCommand(*command, bench_id_, &command_message_);
       command_writer_->Write(command_message_);
+      progress_ns_.store(MonotonicNs(), std::memory_order_relaxed);
     }
     rejections_.Update(core_.rejected_samples(), core_.last_rejection());
   }
@@ -216,6 +222,7 @@ class ControllerService final : public Service {
   std::chrono::milliseconds status_period_;
   ControllerSettings core_settings_;
   std::mutex mutex_;                 ///< the core and the messages below
+  std::atomic<int64_t> progress_ns_{MonotonicNs()};  ///< the latest command written (start: none yet)
   ControllerCore core_;
   DriverState state_;                ///< read into in place
   BenchSample sample_;

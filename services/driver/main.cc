@@ -124,6 +124,12 @@ class DriverService final : public Service {
         lock.unlock();
         maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); });
         lock.lock();
+      } else if (maker_.HandshakeStalled(*participant_, MonotonicNs(), progress_ns_)) {
+        // Progress is a state that applies a command (holding is none): a controller or the
+        // polarimeter whose handshake with this driver stalled starves it of those.
+        lock.unlock();
+        maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); }, "handshake stall");
+        lock.lock();
       }
       const int64_t now_ns = MonotonicNs();
       core_.SetControllersConnected(commands_->counters().matched_writers.load(std::memory_order_relaxed));
@@ -252,6 +258,7 @@ class DriverService final : public Service {
     state.publish_time_ns = WallClockNs();  // after applying: the loop's last timestamp
     bus::WriteState(state, bench_id_, &state_message_);
     state_writer_->Write(state_message_);
+    if (state.mode == DriverMode::kActive) progress_ns_ = MonotonicNs();
     if (state.reason != last_reason_) {
       // Keyed by what the driver does (holds, or obeys whom): a reason that only changes its
       // figures is logged at most every few seconds, with the count it stands for.
@@ -406,6 +413,7 @@ class DriverService final : public Service {
   static constexpr int64_t kYieldWindowNs = 3'000'000'000;
   int64_t first_target_ns_ = 0;  ///< wall clock when it was written (set before any reader exists)
   int64_t started_monotonic_ns_ = 0;  ///< monotonic clock then
+  int64_t progress_ns_ = MonotonicNs();  ///< the latest state applying a command (start: none yet); mutex_
   std::atomic<bool> displaced_{false};
 };
 

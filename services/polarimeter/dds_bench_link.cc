@@ -65,6 +65,9 @@ void DdsBenchLink::WriteSample(const BenchSample& sample) {
 void DdsBenchLink::Publish(const BenchSample& sample) {
   if (reload_requested_.exchange(false)) {
     maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); });
+  } else if (maker_.HandshakeStalled(*participant_, MonotonicNs(), progress_ns_.load(std::memory_order_relaxed))) {
+    // Progress is a valid state of the driver's: a stalled handshake with it withholds them.
+    maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); }, "handshake stall");
   }
   WriteSample(sample);
   if (!summary_writer_) return;
@@ -168,6 +171,7 @@ void DdsBenchLink::OnState(const msg::WaveplateState& message, const SourceId& s
   // One value per control: latest_ keeps its size, nothing allocates.
   latest_ = state_.motion;
   latest_fresh_ = true;
+  progress_ns_.store(MonotonicNs(), std::memory_order_relaxed);
   if (awaited_ != 0 && state_.answers_sample == awaited_) {
     answer_ = latest_.phi;  // lockstep: the point (lockstep controllers send no rate)
     awaited_ = 0;

@@ -13,6 +13,7 @@
 
 #include "bench_core.h"
 #include "dpc/bench/bench_summary.h"
+#include "dpc/bench/clock.h"
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/participant_maker.h"
 #include "log_limiter.h"
@@ -66,6 +67,7 @@ class DdsBenchLink final : public BenchLink {
   double lockstep_timeout_s_;
   std::atomic<bool> stopped_{false};
   std::atomic<bool> reload_requested_{false};
+  std::atomic<int64_t> progress_ns_{MonotonicNs()};  ///< the latest valid state of the driver's (start: none yet)
   double summary_hz_;
   bus::ParticipantMaker maker_;
   std::unique_ptr<bus::BusParticipant> participant_;  ///< replaced only by a reload (Publish)

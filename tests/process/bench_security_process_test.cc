@@ -6,11 +6,18 @@
 // bench keeps locking. Domain 48; loopback only.
 #include <gtest/gtest.h>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -89,42 +96,32 @@ class BenchSecurityTest : public dpc::testing::BenchFixture {
     ASSERT_TRUE(g_setup_error.empty()) << g_setup_error;
     common_args_ = {"--security-dir", g_pki};
     StartObserver(48, {g_pki, "observer"});
-    Process& driver = StartDriver();
-    Process* controller = &StartController("main", 10);
-    Process* polarimeter = &StartPolarimeter({"--rate-hz", "1000"});
-    if (!Eventually([&] { return AppliedBy("main") > 200; }, 15s)) {
-      // Fast DDS 2.9: the security handshake of two participants that start at the same instant
-      // can stall for good — both discovered each other, neither ever reports the other
-      // authenticated (seen about once in twenty starts of this fixture). An operator's remedy
-      // is a restart of one of them; the fixture does that once for the service whose
-      // handshake with the driver (or the polarimeter's with the controller) did not finish, and
-      // says so. A second stall fails the test.
-      const auto authenticated_by = [&](const Process& by, const std::string& name) {
-        const std::string log = by.Log();
-        for (size_t at = log.find("participant authenticated:"); at != std::string::npos;
-             at = log.find("participant authenticated:", at + 1)) {
-          if (log.substr(at, log.find('\n', at) - at).find("(" + name + ")") != std::string::npos) return true;
-        }
-        return false;
-      };
-      for (auto [process, name, restart] :
-           {std::tuple<Process**, std::string, std::function<Process&()>>{
-                &polarimeter, "dpc-polarimeter/bench1",
-                [&]() -> Process& { return StartPolarimeter({"--rate-hz", "1000"}, "polarimeter_restarted"); }},
-            {&controller, "dpc-controller/main", [&]() -> Process& {
-               return Start(DPC_CONTROLLER_BINARY, {"--id", "main", "--priority", "10"}, "controller_main_restarted");
-             }}}) {
-        const bool with_driver = authenticated_by(driver, name);
-        if (with_driver && (process != &polarimeter || authenticated_by(*controller, name))) continue;
-        std::fprintf(stderr, "note: the %s's security handshake with %s did not finish in 15 s (a Fast DDS 2.9 "
-                             "stall); restarting it once\n", with_driver ? "controller" : "driver", name.c_str());
-        (*process)->Signal(SIGTERM);
-        (*process)->Wait(10s);
-        *process = &restart();
+    StartDriver();
+    StartController("main", 10);
+    StartPolarimeter({"--rate-hz", "1000"});
+    // Fast DDS 2.9: the security handshake of two participants that start at the same instant
+    // can stall for good (both discovered each other, neither ever reports the other
+    // authenticated; seen about once in twenty starts of this fixture). The starved service
+    // then makes its participant again by itself after about 10 s (bus::HandshakeWatchdog):
+    // the bench locks within 40 s, and the test says when that happened.
+    ASSERT_TRUE(Eventually([&] { return AppliedBy("main") > 200; }, 40s)) << Logs();
+    NoteHandshakeStallReloads();
+  }
+
+  /// Says on stderr, once each, the lines where a service healed a handshake stall by itself.
+  void NoteHandshakeStallReloads() {
+    for (const auto& p : processes_) {
+      const std::string log = p->Log();
+      for (size_t at = log.find(kStallWarning); at != std::string::npos; at = log.find(kStallWarning, at + 1)) {
+        const size_t begin = log.rfind('\n', at) + 1;  // npos + 1 = 0
+        if (!noted_.insert({p->out_path().string(), begin}).second) continue;
+        std::fprintf(stderr, "note: %s healed a handshake stall: %s\n", p->out_path().stem().c_str(),
+                     log.substr(begin, log.find('\n', at) - begin).c_str());
       }
     }
-    ASSERT_TRUE(Eventually([&] { return AppliedBy("main") > 200; }, 30s)) << Logs();
   }
+  static constexpr const char* kStallWarning = "(a Fast DDS 2.9 handshake stall, or a peer that never answers)";
+  std::set<std::pair<std::string, size_t>> noted_;
 
   /// An attacker: a participant with `security`, writing `Message` (bench1, `controller_id`'s
   /// partition for commands) with `fill`ed data for 1.5 s. Returns how many readers its writer
@@ -295,28 +292,23 @@ TEST_F(BenchSecurityTest, RotatedCredentialsTakeEffectOnSighupWithoutARestart) {
   Process& driver = Service(processes_, "driver");
   Process& controller = Service(processes_, "controller_main");
   Process& polarimeter = Service(processes_, "polarimeter");
-  const std::string reloaded = "endpoints are on the new participant";
+  const std::string reloaded = "reload (SIGHUP): the endpoints are on the new participant";
   // Each reload: the service says it moved, and the bench locks again under main. A reloaded
   // participant's handshake with a peer can stall for good, as a starting one's can (Fast DDS
-  // 2.9, see SetUp; seen once in about ten runs: the new controller never authenticated by the
-  // polarimeter): the remedy, another SIGHUP, is sent once, and said.
+  // 2.9, see SetUp; seen once in about thirty reloads: the new controller never authenticated
+  // by the polarimeter); the starved service heals it (NoteHandshakeStallReloads says so).
   std::map<const Process*, size_t> reloads;
   const auto reload = [&](Process& service, const char* what) {
     const size_t answered = SamplesAnsweredBy(States(), "main");
     const int64_t sent_ns = MonotonicNs();
-    const auto signal = [&] {
-      const size_t before = Count(service.Log(), reloaded);
-      service.Signal(SIGHUP);
-      ++reloads[&service];
-      return Eventually([&] { return Count(service.Log(), reloaded) > before; }, 20s);
-    };
-    ASSERT_TRUE(signal()) << what << " did not reload\n" << Logs();
-    if (!Eventually([&] { return SamplesAnsweredBy(States(), "main") > answered + 200; }, 15s)) {
-      std::fprintf(stderr, "note: the bench did not lock again within 15 s of the %s's reload (a Fast DDS 2.9 "
-                           "handshake stall?); SIGHUP once more\n", what);
-      ASSERT_TRUE(signal()) << what << " did not reload\n" << Logs();
-    }
-    ASSERT_TRUE(Eventually([&] { return SamplesAnsweredBy(States(), "main") > answered + 200; }, 30s))
+    const size_t before = Count(service.Log(), reloaded);
+    service.Signal(SIGHUP);
+    ++reloads[&service];
+    ASSERT_TRUE(Eventually([&] { return Count(service.Log(), reloaded) > before; }, 20s))
+        << what << " did not reload\n" << Logs();
+    // A stalled handshake with the reloaded participant heals by itself (the starved service
+    // makes its participant again after about 10 s): said, and its pause printed with the rest.
+    ASSERT_TRUE(Eventually([&] { return SamplesAnsweredBy(States(), "main") > answered + 200; }, 40s))
         << "the bench did not lock again after the " << what << "'s reload\n" << Logs();
     // The longest pause, from the signal on, between main's commands applied to new samples
     // (states answering a later sample than any before; as the observer received them).
@@ -333,6 +325,7 @@ TEST_F(BenchSecurityTest, RotatedCredentialsTakeEffectOnSighupWithoutARestart) {
     }
     std::printf("reload of the %-12s longest pause between main's commands applied: %.0f ms\n", what,
                 longest_ns * 1e-6);
+    NoteHandshakeStallReloads();
     EXPECT_TRUE(service.running()) << what << " exited";
   };
 
@@ -414,6 +407,137 @@ TEST_F(BenchSecurityTest, AParticipantWithoutCredentialsSeesNothing) {
                 line.find("(dpc-test-eavesdropper)") != std::string::npos;
   }
   EXPECT_EQ(refusals, 1u) << driver_log;
+}
+
+
+/// A peer whose handshake never ends (as a stalled one, or one that stalls on purpose): the SPDP
+/// announcement of a secure participant of this bench that is gone, sent again every 200 ms to
+/// the domain's discovery group from a plain socket. The services discover it, start a
+/// handshake, and never get an answer (nothing listens at its locators any more); its
+/// announcements keep it alive.
+class Ghost {
+ public:
+  explicit Ghost(int domain) : port_(static_cast<uint16_t>(7400 + 250 * domain)) {
+    const int listener = socket(AF_INET, SOCK_DGRAM, 0);
+    const int yes = 1;
+    setsockopt(listener, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+    setsockopt(listener, SOL_SOCKET, SO_REUSEPORT, &yes, sizeof yes);
+    sockaddr_in any{};
+    any.sin_family = AF_INET;
+    any.sin_port = htons(port_);
+    any.sin_addr.s_addr = htonl(INADDR_ANY);
+    ip_mreq group{};
+    group.imr_multiaddr.s_addr = inet_addr("239.255.0.1");
+    group.imr_interface.s_addr = inet_addr("127.0.0.1");
+    const timeval timeout{0, 200'000};
+    if (bind(listener, reinterpret_cast<const sockaddr*>(&any), sizeof any) != 0 ||
+        setsockopt(listener, IPPROTO_IP, IP_ADD_MEMBERSHIP, &group, sizeof group) != 0 ||
+        setsockopt(listener, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout) != 0) {
+      close(listener);
+      throw std::runtime_error(std::string("ghost: cannot listen to the discovery group: ") + std::strerror(errno));
+    }
+    {
+      bus::BusParticipant participant(bus::BusOptions{domain, "dpc-test-ghost", {g_pki, "observer"}});
+      const auto& prefix = participant.raw()->guid().guidPrefix;
+      guid_ = SourceName(bus::SourceOf(prefix));
+      std::vector<uint8_t> datagram(65536);
+      for (const auto end = std::chrono::steady_clock::now() + 5s;
+           announcement_.empty() && std::chrono::steady_clock::now() < end;) {
+        const ssize_t n = recv(listener, datagram.data(), datagram.size(), 0);
+        // RTPS header: "RTPS", version, vendor, then the sender's GUID prefix (12 bytes).
+        if (n >= 20 && std::memcmp(datagram.data(), "RTPS", 4) == 0 &&
+            std::memcmp(datagram.data() + 8, prefix.value, 12) == 0) {
+          announcement_.assign(datagram.begin(), datagram.begin() + n);
+        }
+      }
+    }  // the participant is deleted: its locators close
+    close(listener);
+    if (announcement_.empty()) throw std::runtime_error("ghost: no announcement of its participant in 5 s");
+    sender_ = std::thread([this] { Announce(); });
+  }
+  ~Ghost() {
+    stop_ = true;
+    sender_.join();
+  }
+  /// Its GUID prefix, as the services' logs write it.
+  const std::string& guid() const { return guid_; }
+
+ private:
+  void Announce() {
+    const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+    in_addr loopback{};
+    loopback.s_addr = inet_addr("127.0.0.1");
+    setsockopt(fd, IPPROTO_IP, IP_MULTICAST_IF, &loopback, sizeof loopback);
+    sockaddr_in group{};
+    group.sin_family = AF_INET;
+    group.sin_port = htons(port_);
+    group.sin_addr.s_addr = inet_addr("239.255.0.1");
+    while (!stop_) {
+      sendto(fd, announcement_.data(), announcement_.size(), 0, reinterpret_cast<const sockaddr*>(&group),
+             sizeof group);
+      std::this_thread::sleep_for(200ms);
+    }
+    close(fd);
+  }
+
+  uint16_t port_;
+  std::string guid_;
+  std::vector<uint8_t> announcement_;
+  std::atomic<bool> stop_{false};
+  std::thread sender_;
+};
+
+// A handshake with no outcome heals a starved service by itself, and never costs a working one:
+// with the ghost pending, the locking bench makes no new participant; once its only controller
+// is gone, the driver (no command applied for 10 s, the ghost's handshake pending as long) makes
+// its participant again once, naming the ghost; a controller started then is obeyed at once.
+TEST_F(BenchSecurityTest, AHandshakeWithoutOutcomeHealsAStarvedServiceAndNeverReloadsAWorkingOne) {
+  Process& driver = Service(processes_, "driver");
+  Process& main = Service(processes_, "controller_main");
+  const std::string stall_reload = "reload (handshake stall): the endpoints are on the new participant";
+  Ghost ghost(48);
+  // The stall warnings that name the ghost (a real stall at the fixture's start may have made a
+  // service heal, naming its real peer: that one is legitimate, and not counted).
+  const auto naming_ghost = [&](const Process& p) {
+    std::istringstream lines(p.Log());
+    size_t n = 0;
+    for (std::string line; std::getline(lines, line);) {
+      n += line.find(kStallWarning) != std::string::npos && line.find(ghost.guid()) != std::string::npos;
+    }
+    return n;
+  };
+  // Discovered again after it left (its deletion), by every service.
+  const auto discovered_again = [&](Process& p) {
+    const std::string log = p.Log();
+    const size_t gone = log.find("participant gone: " + ghost.guid());
+    return gone != std::string::npos && log.find("participant discovered: " + ghost.guid(), gone) != std::string::npos;
+  };
+  ASSERT_TRUE(Eventually([&] { return discovered_again(driver) && discovered_again(main); }, 10s)) << Logs();
+  const size_t applied = AppliedBy("main");
+  std::this_thread::sleep_for(14s);  // the ghost's handshake has been pending for more than 10 s
+  for (const auto& p : processes_) {
+    EXPECT_EQ(naming_ghost(*p), 0u) << p->out_path() << " reloaded for the ghost while it worked\n" << p->Log();
+  }
+  EXPECT_GT(AppliedBy("main"), applied + 5000) << "the bench kept locking";
+  EXPECT_TRUE(SoonObeys("main"));
+
+  main.Signal(SIGTERM);
+  ASSERT_EQ(main.Wait(10s), 0);
+  const int64_t starved_ns = MonotonicNs();
+  const size_t reloads_before = Count(driver.Log(), stall_reload);
+  ASSERT_TRUE(Eventually([&] { return Count(driver.Log(), stall_reload) > reloads_before; }, 25s))
+      << "the starved driver did not heal\n" << driver.Log();
+  const double after_s = (MonotonicNs() - starved_ns) * 1e-9;
+  std::printf("the driver made its participant again %.1f s after its controller left\n", after_s);
+  EXPECT_GE(after_s, 9.0) << "too early: it starved for less than 10 s";
+  EXPECT_EQ(naming_ghost(driver), 1u) << "the warning names the ghost (and its name)\n" << driver.Log();
+  EXPECT_NE(driver.Log().find("(dpc-test-ghost) has had no outcome"), std::string::npos) << driver.Log();
+
+  Start(DPC_CONTROLLER_BINARY, {"--id", "main", "--priority", "10"}, "controller_main_again");
+  ASSERT_TRUE(Eventually([&] { return SoonObeys("main", 100ms); }, 20s)) << Logs();
+  std::this_thread::sleep_for(2s);
+  EXPECT_EQ(Count(driver.Log(), stall_reload), reloads_before + 1) << "one reload, then progress";
+  EXPECT_TRUE(driver.running());
 }
 
 }  // namespace

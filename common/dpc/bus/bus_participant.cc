@@ -1,5 +1,6 @@
 #include "dpc/bus/bus_participant.h"
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <set>
@@ -101,7 +102,9 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
  public:
   static constexpr size_t kMaxWriters = 4096;
   static constexpr size_t kMaxNames = 4096;
-  explicit DiscoveryListener(std::function<void(const PeerEvent&)> on_peer) : on_peer_(std::move(on_peer)) {}
+  /// `secure`: handshakes are tracked (PendingHandshakes).
+  DiscoveryListener(std::function<void(const PeerEvent&)> on_peer, bool secure)
+      : on_peer_(std::move(on_peer)), secure_(secure) {}
 
   void on_participant_discovery(fdds::DomainParticipant*,
                                 eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
@@ -114,9 +117,15 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
       if (info.status == Status::DISCOVERED_PARTICIPANT || info.status == Status::CHANGED_QOS_PARTICIPANT) {
         if (names_.size() < kMaxNames || names_.count(prefix) != 0) names_[prefix] = name;
         if (info.status == Status::CHANGED_QOS_PARTICIPANT) return;
+        // Its handshake begins (unless its outcome came first: another thread of Fast DDS's).
+        if (secure_ && settled_.count(prefix) == 0 && pending_.size() < kMaxNames) {
+          pending_.emplace(prefix, SteadyNs());
+        }
       } else {
         names_.erase(prefix);
         refused_.erase(prefix);
+        pending_.erase(prefix);
+        settled_.erase(prefix);
         kind = PeerEvent::Kind::kGone;
       }
     }
@@ -131,6 +140,8 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (auto found = names_.find(prefix); found != names_.end()) name = found->second;
+      pending_.erase(prefix);
+      if (settled_.size() < kMaxNames) settled_.insert(prefix);
       // A refused participant is handshaken and refused again at each of its announcements
       // (every second): it is reported once, until it is gone.
       if (refused) {
@@ -162,13 +173,36 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
     auto found = partitions_.find(writer);
     return found == partitions_.end() ? std::string() : found->second;
   }
+  std::vector<std::string> PendingHandshakes(int64_t older_than_ns) const {
+    const int64_t now_ns = SteadyNs();
+    std::vector<std::string> peers;
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& [prefix, since_ns] : pending_) {
+      if (now_ns - since_ns < older_than_ns) continue;
+      const auto name = names_.find(prefix);
+      const std::string guid = SourceName(SourceOf(prefix));
+      peers.push_back(name == names_.end() || name->second.empty() ? guid : guid + " (" + name->second + ")");
+    }
+    return peers;
+  }
 
  private:
+  static int64_t SteadyNs() {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+  }
+
   std::function<void(const PeerEvent&)> on_peer_;
+  const bool secure_;
   mutable std::mutex mutex_;
   std::map<eprosima::fastrtps::rtps::GUID_t, std::string> partitions_;
   std::map<eprosima::fastrtps::rtps::GuidPrefix_t, std::string> names_;  ///< bounded by kMaxNames
   std::set<eprosima::fastrtps::rtps::GuidPrefix_t> refused_;            ///< reported; bounded by kMaxNames
+  /// Secure only: discovered participants whose handshake has no outcome yet, since when
+  /// (steady clock); and those whose handshake had one (authenticated or refused). Both
+  /// bounded by kMaxNames; a participant gone leaves both.
+  std::map<eprosima::fastrtps::rtps::GuidPrefix_t, int64_t> pending_;
+  std::set<eprosima::fastrtps::rtps::GuidPrefix_t> settled_;
 };
 
 std::string PrintableName(const std::string& name) {
@@ -244,7 +278,7 @@ BusParticipant::BusParticipant(const BusOptions& options, std::function<void(con
   secure_ = options.security.enabled();
   // What a killed process left in /dev/shm delays the discovery of the one that replaces it.
   if (ProfilesUseSharedMemory(profiles_file_)) shm_cleanup_ = RemoveStaleShmFiles();
-  discovery_ = std::make_unique<DiscoveryListener>(std::move(on_peer));
+  discovery_ = std::make_unique<DiscoveryListener>(std::move(on_peer), secure_);
   participant_ = factory->create_participant(options.domain_id, qos, discovery_.get(), fdds::StatusMask::none());
   if (participant_ == nullptr) {
     throw BusError(secure_ ? fmt::format("Fast DDS could not create a secure participant on domain {} as \"{}\" "
@@ -254,6 +288,10 @@ BusParticipant::BusParticipant(const BusOptions& options, std::function<void(con
                            : fmt::format("Fast DDS could not create a participant on domain {} with {}",
                                          options.domain_id, profiles_file_));
   }
+}
+
+std::vector<std::string> BusParticipant::PendingHandshakes(int64_t older_than_ns) const {
+  return discovery_->PendingHandshakes(older_than_ns);
 }
 
 std::string BusParticipant::WriterPartition(const eprosima::fastrtps::rtps::GUID_t& writer) const {

@@ -425,6 +425,12 @@ class BusParticipant {
   /// in; "" if it is not (or no longer) known.
   std::string WriterPartition(const eprosima::fastrtps::rtps::GUID_t& writer) const;
 
+  /// With DDS Security: the remote participants discovered at least `older_than_ns` ago (steady
+  /// clock) whose handshake has had no outcome since (neither authenticated nor refused, nor
+  /// gone), as "GUID prefix (name)". Empty on an open participant. (Fast DDS 2.9's handshake
+  /// can stall for good: HandshakeWatchdog.)
+  std::vector<std::string> PendingHandshakes(int64_t older_than_ns) const;
+
   eprosima::fastdds::dds::DomainParticipant* raw() const { return participant_; }
   const std::string& profiles_file() const { return profiles_file_; }
   /// With a shared-memory profile: the stale Fast DDS files removed before the participant was

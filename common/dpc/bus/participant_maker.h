@@ -9,6 +9,9 @@
 // are refused and the service keeps running on the participant it has. Only then are the
 // service's endpoints deleted (readers first: their callbacks end before anything they use
 // goes), the old participant replaced, and the endpoints made again on the new one.
+//
+// A secured service also reloads by itself when a peer's handshake has stalled and the service
+// starves for it (HandshakeStalled, HandshakeWatchdog).
 
 #include <functional>
 #include <memory>
@@ -16,6 +19,7 @@
 #include <utility>
 
 #include "dpc/bus/bus_participant.h"
+#include "dpc/bus/handshake_watchdog.h"
 
 namespace dpc::bus {
 
@@ -34,8 +38,9 @@ class ParticipantMaker {
   /// is replaced: `delete_endpoints` deletes the readers first). A new participant; if it cannot
   /// be made, the error is logged and nothing changes (false). Else `delete_endpoints`, the old
   /// participant replaced by the new one, `make_endpoints` (on it), and true.
+  /// `cause`: what the log lines say ("reload (SIGHUP): …").
   bool Reload(std::unique_ptr<BusParticipant>* participant, const std::function<void()>& delete_endpoints,
-              const std::function<void()>& make_endpoints) const {
+              const std::function<void()>& make_endpoints, const std::string& cause = "SIGHUP") const {
     const std::string credentials =
         options_.security.enabled()
             ? "identity " + options_.security.identity + " of " + options_.security.directory
@@ -44,15 +49,29 @@ class ParticipantMaker {
     try {
       fresh = Make();
     } catch (const std::exception& e) {
-      log_(true, std::string("reload (SIGHUP) refused, the running participant is kept: ") + e.what() + " (" +
+      log_(true, "reload (" + cause + ") refused, the running participant is kept: " + e.what() + " (" +
                      credentials + ")");
       return false;
     }
-    log_(false, "reload (SIGHUP): a new participant (" + credentials + "); its endpoints follow");
+    log_(false, "reload (" + cause + "): a new participant (" + credentials + "); its endpoints follow");
     delete_endpoints();
     *participant = std::move(fresh);  // the old participant goes
     make_endpoints();
-    log_(false, "reload (SIGHUP): the endpoints are on the new participant");
+    log_(false, "reload (" + cause + "): the endpoints are on the new participant");
+    return true;
+  }
+
+  /// As often as convenient (it looks at most once a second; cheap otherwise): with DDS
+  /// Security, whether a peer's handshake has had no outcome for HandshakeWatchdog::kStallNs
+  /// while the service made no progress since `progress_ns` (monotonic, like `now_ns`) for as
+  /// long. If so, a line in the log says so, and the service should Reload(…, "handshake stall")
+  /// now (HandshakeWatchdog's back-off is running).
+  bool HandshakeStalled(const BusParticipant& participant, int64_t now_ns, int64_t progress_ns) {
+    if (!participant.secure() || !watchdog_.Due(now_ns)) return false;
+    const std::string why =
+        watchdog_.Judge(now_ns, progress_ns, participant.PendingHandshakes(HandshakeWatchdog::kStallNs));
+    if (why.empty()) return false;
+    log_(true, why);
     return true;
   }
 
@@ -60,6 +79,7 @@ class ParticipantMaker {
   BusOptions options_;
   std::function<void(const PeerEvent&)> on_peer_;
   Log log_;
+  HandshakeWatchdog watchdog_;
 };
 
 }  // namespace dpc::bus

@@ -1,0 +1,77 @@
+#pragma once
+// When a secured service makes its DDS participant again by itself. Fast DDS 2.9's security
+// handshake between two participants can stall for good: both have discovered each other,
+// neither ever reports the other authenticated or refused, and no data flows between them (seen
+// about once in twenty simultaneous starts, and once in about thirty reloads, on loopback). A new
+// participant is handshaken afresh, which is what a restart or a SIGHUP did by hand.
+//
+// The watchdog asks for that only when both hold:
+//   - a peer's handshake has had no outcome for kStallNs (BusParticipant::PendingHandshakes);
+//   - the service has made no progress for kStallNs (the driver applied no command, the
+//     controller wrote none, the polarimeter received no state): the stall costs the bench.
+// A peer that never finishes a handshake on purpose therefore cannot make a working service
+// reload; and a starved one reloads at most after kFirstBackoffNs, then after twice as long each
+// time, up to kMaxBackoffNs, until it makes progress again (then a new stall heals after
+// kStallNs again). Pure policy (no clock, no DDS): the
+// service gives it the times and the stalled peers (ParticipantMaker::ReloadIfStalled).
+
+#include <algorithm>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace dpc::bus {
+
+class HandshakeWatchdog {
+ public:
+  static constexpr int64_t kStallNs = 10'000'000'000;         ///< a pending handshake, and no progress
+  static constexpr int64_t kCheckPeriodNs = 1'000'000'000;    ///< Due() at most this often
+  static constexpr int64_t kFirstBackoffNs = 30'000'000'000;  ///< after a reload, the next one at the earliest
+  static constexpr int64_t kMaxBackoffNs = 600'000'000'000;
+
+  /// Whether to look now (true at most every kCheckPeriodNs of `now_ns`, monotonic).
+  bool Due(int64_t now_ns) {
+    if (now_ns < next_check_ns_) return false;
+    next_check_ns_ = now_ns + kCheckPeriodNs;
+    return true;
+  }
+
+  /// `stalled`: the peers whose handshakes have been pending for kStallNs or longer;
+  /// `progress_ns`: when the service last made progress (its start, if never). Why the service
+  /// should make its participant again now (recorded as a reload: the back-off starts), or
+  /// empty.
+  std::string Judge(int64_t now_ns, int64_t progress_ns, const std::vector<std::string>& stalled) {
+    if (now_ns - progress_ns < kStallNs) {
+      // Working (again): a later stall is healed as soon as the first was.
+      backoff_ns_ = kFirstBackoffNs;
+      not_before_ns_ = 0;
+      return {};
+    }
+    if (stalled.empty() || now_ns < not_before_ns_) return {};
+    std::string peers;
+    for (size_t i = 0; i < stalled.size() && i < kMaxNamed; ++i) peers += (i == 0 ? "" : ", ") + stalled[i];
+    if (stalled.size() > kMaxNamed) peers += " and " + std::to_string(stalled.size() - kMaxNamed) + " more";
+    ++reloads_;
+    not_before_ns_ = now_ns + backoff_ns_;
+    std::string why = "the security handshake with " + peers + " has had no outcome for " +
+                      std::to_string(kStallNs / 1'000'000'000) + " s or more, and this service has made no " +
+                      "progress for " + std::to_string((now_ns - progress_ns) / 1'000'000'000) +
+                      " s (a Fast DDS 2.9 handshake stall, or a peer that never answers): a new participant, "
+                      "handshaken afresh; while nothing improves, the next such reload not before " +
+                      std::to_string(backoff_ns_ / 1'000'000'000) + " s";
+    backoff_ns_ = std::min(2 * backoff_ns_, kMaxBackoffNs);
+    return why;
+  }
+
+  /// How many reloads Judge asked for.
+  uint64_t reloads() const { return reloads_; }
+
+ private:
+  static constexpr size_t kMaxNamed = 3;
+  int64_t next_check_ns_ = 0;
+  int64_t not_before_ns_ = 0;
+  int64_t backoff_ns_ = kFirstBackoffNs;
+  uint64_t reloads_ = 0;
+};
+
+}  // namespace dpc::bus

@@ -1,0 +1,65 @@
+// HandshakeWatchdog: when a secured service makes its participant again by itself (a handshake
+// with no outcome, and no progress, both for 10 s), and how often at most.
+#include "dpc/bus/handshake_watchdog.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+namespace dpc::bus {
+namespace {
+
+constexpr int64_t kS = 1'000'000'000;
+const std::vector<std::string> kNone;
+const std::vector<std::string> kGhost = {"01.0f.aa (dpc-test-ghost)"};
+
+TEST(HandshakeWatchdogTest, LooksAtMostOnceASecond) {
+  HandshakeWatchdog watchdog;
+  EXPECT_TRUE(watchdog.Due(100 * kS));
+  EXPECT_FALSE(watchdog.Due(100 * kS + kS / 2));
+  EXPECT_TRUE(watchdog.Due(101 * kS));
+  EXPECT_FALSE(watchdog.Due(101 * kS));
+}
+
+TEST(HandshakeWatchdogTest, AsksForAReloadOnlyWhenAHandshakeStalledAndTheServiceStarves) {
+  HandshakeWatchdog watchdog;
+  const int64_t start = 1000 * kS;
+  // A working service (progress 9.9 s ago) with a stalled peer: nothing.
+  EXPECT_EQ(watchdog.Judge(start, start - 9'900'000'000, kGhost), "");
+  // A starved service with no stalled peer (nobody there, or every handshake finished): nothing.
+  EXPECT_EQ(watchdog.Judge(start, start - 60 * kS, kNone), "");
+  // Both: a reload, named and explained.
+  const std::string why = watchdog.Judge(start, start - 12 * kS, kGhost);
+  EXPECT_NE(why.find("01.0f.aa (dpc-test-ghost)"), std::string::npos) << why;
+  EXPECT_NE(why.find("no progress for 12 s"), std::string::npos) << why;
+  EXPECT_NE(why.find("not before 30 s"), std::string::npos) << why;
+  EXPECT_EQ(watchdog.reloads(), 1u);
+}
+
+TEST(HandshakeWatchdogTest, AStarvedServiceReloadsLessAndLessOftenUntilItWorksAgain) {
+  HandshakeWatchdog watchdog;
+  const int64_t progress = 0;
+  std::vector<int64_t> reloads_s;
+  for (int64_t t = 10 * kS; t <= 2000 * kS; t += kS) {
+    if (!watchdog.Judge(t, progress, kGhost).empty()) reloads_s.push_back(t / kS);
+  }
+  // 30, 60, 120, 240, 480 s apart, then 600 s (the longest).
+  EXPECT_EQ(reloads_s, (std::vector<int64_t>{10, 40, 100, 220, 460, 940, 1540}));
+  // It works again: a new stall heals as soon as the first did, then 30 s later.
+  EXPECT_EQ(watchdog.Judge(2001 * kS, 2000 * kS, kGhost), "");
+  EXPECT_EQ(watchdog.Judge(2010 * kS, 2001 * kS, kGhost), "");  // starved for 9 s only
+  EXPECT_NE(watchdog.Judge(2011 * kS, 2001 * kS, kGhost), "");
+  EXPECT_EQ(watchdog.Judge(2040 * kS, 2001 * kS, kGhost), "");
+  EXPECT_NE(watchdog.Judge(2041 * kS, 2001 * kS, kGhost), "");
+}
+
+TEST(HandshakeWatchdogTest, NamesAtMostThreePeersAndCountsTheRest) {
+  HandshakeWatchdog watchdog;
+  const std::string why = watchdog.Judge(100 * kS, 0, {"a (1)", "b (2)", "c (3)", "d (4)", "e (5)"});
+  EXPECT_NE(why.find("a (1), b (2), c (3) and 2 more"), std::string::npos) << why;
+  EXPECT_EQ(why.find("d (4)"), std::string::npos) << why;
+}
+
+}  // namespace
+}  // namespace dpc::bus
