@@ -82,14 +82,14 @@ class ControllerService final : public Service {
   cli::ExitCode run() override {
     std::string last_condition;
     while (!WaitForStopFor(status_period_)) {
-      // The controller answers no sample until its new readers are matched; the driver
-      // meanwhile treats it as silent.
-      if (TakeReloadRequest()) {
-        maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); });
-      } else if (maker_.HandshakeStalled(*participant_, MonotonicNs(), progress_ns_.load())) {
-        // Progress is a command written: it needs the driver's description and the
-        // polarimeter's samples, which a stalled handshake with either withholds.
-        maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); }, "handshake stall");
+      // A SIGHUP, or a handshake stall: progress is a command written, which needs the driver's
+      // description and the polarimeter's samples, which a stalled handshake with either
+      // withholds. The controller answers no sample until its new readers are matched; the
+      // driver meanwhile treats it as silent.
+      if (const bool sighup = TakeReloadRequest();
+          sighup || maker_.HandshakeStalled(*participant_, MonotonicNs(), progress_ns_.load())) {
+        maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); },
+                      sighup ? "SIGHUP" : "handshake stall");
       }
       std::lock_guard<std::mutex> lock(mutex_);
       const ControllerStatusReport status =

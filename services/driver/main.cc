@@ -117,18 +117,16 @@ class DriverService final : public Service {
     constexpr int64_t kMaxSleepNs = 5'000'000;
     std::unique_lock<std::mutex> lock(mutex_);
     while (!stopped()) {
-      if (TakeReloadRequest()) {
-        // No tick runs meanwhile and the controllers' commands go nowhere until the new
-        // endpoints are matched: the waveplates stay where they are; then the usual rules
-        // (silence, hold, failover) apply to what arrives.
+      // A SIGHUP, or a handshake stall: progress is a state that applies a command (holding is
+      // none), which a controller or the polarimeter whose handshake with this driver stalled
+      // withholds. No tick runs meanwhile and the controllers' commands go nowhere until the
+      // new endpoints are matched: the waveplates stay where they are; then the usual rules
+      // (silence, hold, failover) apply to what arrives.
+      if (const bool sighup = TakeReloadRequest();
+          sighup || maker_.HandshakeStalled(*participant_, MonotonicNs(), progress_ns_)) {
         lock.unlock();
-        maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); });
-        lock.lock();
-      } else if (maker_.HandshakeStalled(*participant_, MonotonicNs(), progress_ns_)) {
-        // Progress is a state that applies a command (holding is none): a controller or the
-        // polarimeter whose handshake with this driver stalled starves it of those.
-        lock.unlock();
-        maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); }, "handshake stall");
+        maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); },
+                      sighup ? "SIGHUP" : "handshake stall");
         lock.lock();
       }
       const int64_t now_ns = MonotonicNs();

@@ -63,11 +63,12 @@ void DdsBenchLink::WriteSample(const BenchSample& sample) {
 }
 
 void DdsBenchLink::Publish(const BenchSample& sample) {
-  if (reload_requested_.exchange(false)) {
-    maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); });
-  } else if (maker_.HandshakeStalled(*participant_, MonotonicNs(), progress_ns_.load(std::memory_order_relaxed))) {
-    // Progress is a valid state of the driver's: a stalled handshake with it withholds them.
-    maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); }, "handshake stall");
+  // A SIGHUP, or a handshake stall: progress is a valid state of the driver's, which a stalled
+  // handshake with it withholds.
+  if (const bool sighup = reload_requested_.exchange(false);
+      sighup || maker_.HandshakeStalled(*participant_, MonotonicNs(), progress_ns_.load(std::memory_order_relaxed))) {
+    maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); },
+                  sighup ? "SIGHUP" : "handshake stall");
   }
   WriteSample(sample);
   if (!summary_writer_) return;

@@ -28,7 +28,6 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
-#include <tuple>
 #include <vector>
 
 #include "support/bench_fixture.h"
@@ -249,13 +248,12 @@ TEST_F(BenchSecurityTest, NoOneWithoutTheBenchsCredentialsOrTheRightPermissionIs
   EXPECT_GT(StandbyMatched(g_pki, &how), 0) << "the legitimate standby: " << how;
 }
 
-/// The running service whose log is `name`.log (the fixture's restart after a handshake stall
-/// is `name`_restarted).
+/// The running service whose log is `name`.log.
 Process& Service(std::vector<std::unique_ptr<Process>>& processes, const std::string& name) {
   Process* found = nullptr;
   for (auto& p : processes) {
     const std::string stem = p->out_path().stem().string();
-    if (stem == name || stem == name + "_restarted") found = p.get();
+    if (stem == name) found = p.get();
   }
   if (found == nullptr) throw std::runtime_error("no process " + name);
   return *found;
@@ -408,7 +406,6 @@ TEST_F(BenchSecurityTest, AParticipantWithoutCredentialsSeesNothing) {
   }
   EXPECT_EQ(refusals, 1u) << driver_log;
 }
-
 
 /// A peer whose handshake never ends (as a stalled one, or one that stalls on purpose): the SPDP
 /// announcement of a secure participant of this bench that is gone, sent again every 200 ms to

@@ -1,6 +1,5 @@
 #include "dpc/bus/bus_participant.h"
 
-#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <set>
@@ -11,6 +10,7 @@
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fmt/format.h>
 
+#include "dpc/bench/clock.h"
 #include "dpc/bus/message_conversion.h"
 #include "dpc/bus/shm_segments.h"
 
@@ -41,6 +41,11 @@ std::string FirstName(const fdds::PartitionQosPolicy& partition) {
 
 constexpr std::string_view kBenchPrefix = "dpc.";
 constexpr std::string_view kControllerInfix = ".controller.";
+
+/// A remote participant as the logs name it: "GUID prefix (name)", or the prefix alone.
+std::string Who(const std::string& guid, const std::string& name) {
+  return name.empty() ? guid : fmt::format("{} ({})", guid, name);
+}
 
 }  // namespace
 
@@ -119,7 +124,7 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
         if (info.status == Status::CHANGED_QOS_PARTICIPANT) return;
         // Its handshake begins (unless its outcome came first: another thread of Fast DDS's).
         if (secure_ && settled_.count(prefix) == 0 && pending_.size() < kMaxNames) {
-          pending_.emplace(prefix, SteadyNs());
+          pending_.emplace(prefix, MonotonicNs());
         }
       } else {
         names_.erase(prefix);
@@ -174,24 +179,18 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
     return found == partitions_.end() ? std::string() : found->second;
   }
   std::vector<std::string> PendingHandshakes(int64_t older_than_ns) const {
-    const int64_t now_ns = SteadyNs();
+    const int64_t now_ns = MonotonicNs();
     std::vector<std::string> peers;
     std::lock_guard<std::mutex> lock(mutex_);
     for (const auto& [prefix, since_ns] : pending_) {
       if (now_ns - since_ns < older_than_ns) continue;
       const auto name = names_.find(prefix);
-      const std::string guid = SourceName(SourceOf(prefix));
-      peers.push_back(name == names_.end() || name->second.empty() ? guid : guid + " (" + name->second + ")");
+      peers.push_back(Who(SourceName(SourceOf(prefix)), name == names_.end() ? std::string() : name->second));
     }
     return peers;
   }
 
  private:
-  static int64_t SteadyNs() {
-    return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-        .count();
-  }
-
   std::function<void(const PeerEvent&)> on_peer_;
   const bool secure_;
   mutable std::mutex mutex_;
@@ -199,7 +198,7 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
   std::map<eprosima::fastrtps::rtps::GuidPrefix_t, std::string> names_;  ///< bounded by kMaxNames
   std::set<eprosima::fastrtps::rtps::GuidPrefix_t> refused_;            ///< reported; bounded by kMaxNames
   /// Secure only: discovered participants whose handshake has no outcome yet, since when
-  /// (steady clock); and those whose handshake had one (authenticated or refused). Both
+  /// (MonotonicNs); and those whose handshake had one (authenticated or refused). Both
   /// bounded by kMaxNames; a participant gone leaves both.
   std::map<eprosima::fastrtps::rtps::GuidPrefix_t, int64_t> pending_;
   std::set<eprosima::fastrtps::rtps::GuidPrefix_t> settled_;
@@ -213,7 +212,7 @@ std::string PrintableName(const std::string& name) {
 }
 
 std::string Describe(const PeerEvent& event) {
-  const std::string who = event.name.empty() ? event.guid : fmt::format("{} ({})", event.guid, event.name);
+  const std::string who = Who(event.guid, event.name);
   switch (event.kind) {
     case PeerEvent::Kind::kDiscovered: return "participant discovered: " + who;
     case PeerEvent::Kind::kGone: return "participant gone: " + who;

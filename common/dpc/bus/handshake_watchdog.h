@@ -12,8 +12,8 @@
 // A peer that never finishes a handshake on purpose therefore cannot make a working service
 // reload; and a starved one reloads at most after kFirstBackoffNs, then after twice as long each
 // time, up to kMaxBackoffNs, until it makes progress again (then a new stall heals after
-// kStallNs again). Pure policy (no clock, no DDS): the
-// service gives it the times and the stalled peers (ParticipantMaker::ReloadIfStalled).
+// kStallNs again). Pure policy (no clock, no DDS): the service gives it the times and the
+// stalled peers (ParticipantMaker::HandshakeStalled).
 
 #include <algorithm>
 #include <cstdint>
