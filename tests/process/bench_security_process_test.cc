@@ -5,6 +5,7 @@
 // permissions do not grant. Each attack gets 0 matched readers and 0 applied data, while the
 // bench keeps locking. Domain 48; loopback only.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -535,6 +536,70 @@ TEST_F(BenchSecurityTest, AHandshakeWithoutOutcomeHealsAStarvedServiceAndNeverRe
   std::this_thread::sleep_for(2s);
   EXPECT_EQ(Count(driver.Log(), stall_reload), reloads_before + 1) << "one reload, then progress";
   EXPECT_TRUE(driver.running());
+}
+
+// A `dpc` command heals a stalled handshake too, and keeps what it had: `dpc record` and `dpc
+// monitor`, started beside the ghost, hear nothing from it; after 10 s each makes its participant
+// again (naming the ghost), and the recording goes on with the bench's samples, in the same file,
+// as the monitor's lines do.
+TEST_F(BenchSecurityTest, ADpcCommandHealsAStalledHandshakeAndKeepsRecording) {
+  Ghost ghost(48);
+  const std::string file = dir_ + "/healed.mcap";
+  const int64_t start_ns = MonotonicNs();
+  Process& record = Start(DPC_BINARY, {"record", "--output", file, "--duration-s", "18"}, "record");
+  Process& monitor = Start(DPC_BINARY, {"monitor", "--lines", "--rate-hz", "2", "--duration-s", "18"}, "monitor");
+  const std::string reloaded = "dpc record: reload (handshake stall): the endpoints are on the new participant";
+  ASSERT_TRUE(Eventually([&] { return Count(record.Log(), reloaded) > 0; }, 16s))
+      << "dpc record did not heal\n" << record.Log();
+  const double after_s = (MonotonicNs() - start_ns) * 1e-9;
+  std::printf("dpc record made its participant again %.1f s after it started\n", after_s);
+  EXPECT_GE(after_s, 9.0) << "too early: the ghost was pending for less than 10 s";
+  ASSERT_EQ(record.Wait(20s), 0) << record.Log();
+  const std::string log = record.Log();
+  const size_t warning = log.find(kStallWarning);
+  ASSERT_NE(warning, std::string::npos) << log;
+  const size_t line = log.rfind('\n', warning) + 1;
+  // It names the ghost (and any real peer whose handshake stalled too: seen once).
+  EXPECT_NE(log.substr(line, warning - line).find(ghost.guid() + " (dpc-test-ghost)"), std::string::npos) << log;
+  EXPECT_NE(log.find("so nothing of theirs reaches this command"), std::string::npos) << log;
+  EXPECT_EQ(Count(log, reloaded), 1u) << "the next one not before 30 s\n" << log;
+  // The samples counted in the status lines: before the reload, and at the end (1 kHz bench).
+  const auto samples_in = [](const std::string& status) {
+    const size_t at = status.find(", samples ");
+    return at == std::string::npos ? -1L : std::stol(status.substr(at + 10));
+  };
+  const size_t reload_at = log.find(reloaded);
+  const size_t status_before = log.rfind("dpc record: ", log.rfind(" s, ", reload_at));
+  const long before = samples_in(log.substr(status_before, log.find('\n', status_before) - status_before));
+  const size_t summary = log.find("dpc record: samples ");
+  ASSERT_NE(summary, std::string::npos) << log;
+  const long total = std::stol(log.substr(summary + 20));
+  EXPECT_GT(before, 1000) << "it recorded before the reload\n" << log;
+  EXPECT_GT(total, before + 4000) << "it recorded after the reload\n" << log;
+  std::printf("samples recorded: %ld before the reload, %ld in all\n", before, total);
+  // The file says when, and how many: `dpc info` reads it as complete.
+  std::string out;
+  FILE* info = popen((std::string(DPC_BINARY) + " info --json " + file).c_str(), "r");
+  ASSERT_NE(info, nullptr);
+  for (char buffer[4096]; const size_t n = fread(buffer, 1, sizeof buffer, info);) out.append(buffer, n);
+  ASSERT_EQ(pclose(info), 0) << out;
+  const nlohmann::json j = nlohmann::json::parse(out);
+  EXPECT_EQ(j["complete"], true) << out;
+  EXPECT_EQ(j["metadata"]["participant_reload"]["cause"], "handshake stall") << out;
+  EXPECT_EQ(j["metadata"]["recording"]["participant_reloads"], "1") << out;
+  EXPECT_EQ(j["metadata"]["recording"]["samples"], std::to_string(total)) << out;
+
+  // `dpc monitor` healed too, and went on showing the bench's samples (1 kHz).
+  ASSERT_EQ(monitor.Wait(5s), 0) << monitor.Log();
+  const std::string shown = monitor.Log();
+  const size_t monitor_reload = shown.find("dpc monitor: reload (handshake stall): the endpoints are on the new participant");
+  ASSERT_NE(monitor_reload, std::string::npos) << shown;
+  double rate_after_hz = 0;
+  for (size_t at = shown.find("| rate_hz ", monitor_reload); at != std::string::npos;
+       at = shown.find("| rate_hz ", at + 1)) {
+    rate_after_hz = std::max(rate_after_hz, std::stod(shown.substr(at + 10)));
+  }
+  EXPECT_GT(rate_after_hz, 500) << shown;
 }
 
 }  // namespace

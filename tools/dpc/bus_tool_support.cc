@@ -1,6 +1,10 @@
 #include "bus_tool_support.h"
 
+#include <fmt/core.h>
+
 #include <thread>
+
+#include "dpc/bench/clock.h"
 
 namespace dpc::tools {
 namespace {
@@ -29,6 +33,27 @@ void AddBusToolOptions(CLI::App& command, BusToolOptions* options, const char* b
 
 bus::BusOptions BusToolOptions::Participant(const std::string& name, const std::string& default_identity) const {
   return bus::BusOptions{domain_id, name, {security_dir, identity.empty() ? default_identity : identity}};
+}
+
+ObserverParticipant::ObserverParticipant(const BusToolOptions& options, const std::string& command,
+                                         const std::string& default_identity)
+    : maker_(options.Participant(command, default_identity), {},
+             [command](bool, const std::string& text) { fmt::print(stderr, "{}: {}\n", command, text); },
+             bus::HandshakeWatchdog::Starving::kObserver),
+      participant_(maker_.Make()),
+      settled_ns_(MonotonicNs()) {}
+
+bool ObserverParticipant::Heal(const std::function<void()>& delete_endpoints,
+                               const std::function<void()>& make_endpoints) {
+  if (!participant_->secure()) return false;
+  const int64_t now_ns = MonotonicNs();
+  if (now_ns < next_look_ns_) return false;
+  next_look_ns_ = now_ns + bus::HandshakeWatchdog::kCheckPeriodNs;
+  if (participant_->PendingHandshakes(0).empty()) settled_ns_ = now_ns;
+  if (!maker_.HandshakeStalled(*participant_, now_ns, settled_ns_)) return false;
+  if (!maker_.Reload(&participant_, delete_endpoints, make_endpoints, "handshake stall")) return false;
+  ++reloads_;
+  return true;
 }
 
 std::string BenchFilter(const std::string& bench_id) {

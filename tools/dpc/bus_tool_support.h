@@ -9,9 +9,11 @@
 #include <chrono>
 #include <csignal>
 #include <functional>
+#include <memory>
 #include <string>
 
 #include "dpc/bus/bus_participant.h"
+#include "dpc/bus/participant_maker.h"
 
 namespace dpc::tools {
 
@@ -24,6 +26,40 @@ struct BusToolOptions {
   /// The participant's options: this domain, `name`, the credentials of `identity` (or of
   /// `default_identity`).
   bus::BusOptions Participant(const std::string& name, const std::string& default_identity) const;
+};
+
+/// A long-running command's participant (record, monitor, dashboard, topic echo/hz). With DDS
+/// Security it heals a stalled handshake by itself, as the services do: when a peer's handshake
+/// has had no outcome for 10 s (so nothing of that peer's reaches the command), a line on stderr
+/// names the peer, and the participant and the command's endpoints are made again
+/// (bus::ParticipantMaker, bus::HandshakeWatchdog as an observer). While some handshake stays
+/// pending (a peer that never answers), the next such reload comes after 30 s, then twice as late
+/// each time, up to 10 min; once none is pending, the back-off starts over.
+class ObserverParticipant {
+ public:
+  /// `command`: the participant's name and the prefix of the lines on stderr ("dpc record").
+  /// Throws as bus::BusParticipant does.
+  ObserverParticipant(const BusToolOptions& options, const std::string& command, const std::string& default_identity);
+
+  bus::BusParticipant& operator*() const { return *participant_; }
+  bus::BusParticipant* operator->() const { return participant_.get(); }
+
+  /// From the command's loop, on the thread that owns the endpoints, as often as convenient (it
+  /// looks at most once a second). If a handshake stalled: a new participant, then
+  /// `delete_endpoints` (the old participant's; readers first), the participant replaced, and
+  /// `make_endpoints` on the new one; true then. False (nothing changed) otherwise, and
+  /// without DDS Security.
+  bool Heal(const std::function<void()>& delete_endpoints, const std::function<void()>& make_endpoints);
+
+  /// How many times Heal made the participant again.
+  uint64_t reloads() const { return reloads_; }
+
+ private:
+  bus::ParticipantMaker maker_;
+  std::unique_ptr<bus::BusParticipant> participant_;
+  int64_t settled_ns_;  ///< when it last had no handshake pending (MonotonicNs)
+  int64_t next_look_ns_ = 0;
+  uint64_t reloads_ = 0;
 };
 
 /// Adds --domain (0…232), --security-dir and --identity (also $DPC_SECURITY_DIR, $DPC_IDENTITY)

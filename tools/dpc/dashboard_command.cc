@@ -44,10 +44,17 @@ bool HasIndex(const std::string& dir) {
 /// answers (or does not).
 class TargetRequests {
  public:
-  TargetRequests(bus::Writer<msg::TargetRequest>* writer, const DashboardOptions& o) : writer_(writer), options_(o) {}
+  explicit TargetRequests(const DashboardOptions& o) : options_(o) {}
 
   /// Before any message or reply arrives; `server` outlives the readers that call OnReply.
   void SetServer(DashboardServer* server) { server_ = server; }
+
+  /// The writer of the requests from now on (null: none, the page's requests are refused); a
+  /// request being written is written first.
+  void SetWriter(bus::Writer<msg::TargetRequest>* writer) {
+    std::lock_guard<std::mutex> lock(writer_mutex_);
+    writer_ = writer;
+  }
 
   /// On the server's thread: a page's message.
   void OnPageMessage(uint64_t client, const std::string& text) {
@@ -55,6 +62,7 @@ class TargetRequests {
     std::string error;
     const std::optional<TargetConfig> target = ParsePageTargetRequest(text, &tag, &error);
     if (!target) return Answer(client, tag, false, error, 0);
+    std::lock_guard<std::mutex> writer_lock(writer_mutex_);
     if (writer_ == nullptr) {
       return Answer(client, tag, false,
                     "this dashboard may not publish target requests (its DDS identity has no such permission: "
@@ -147,7 +155,8 @@ class TargetRequests {
   }
 
   DashboardServer* server_ = nullptr;
-  bus::Writer<msg::TargetRequest>* writer_;
+  std::mutex writer_mutex_;  ///< before mutex_ where both are held
+  bus::Writer<msg::TargetRequest>* writer_ = nullptr;  ///< SetWriter
   const DashboardOptions& options_;
   std::mutex mutex_;
   std::map<std::string, Pending> pending_;
@@ -276,58 +285,79 @@ cli::ExitCode RunDashboardCommand(const DashboardOptions& o) {
     const auto start = Clock::now();
     const auto now_s = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
     DashboardModel model(DashboardModelOptions{o.lock_threshold_deg});
-    bus::BusParticipant participant(o.bus.Participant("dpc dashboard", "operator"));
+    ObserverParticipant participant(o.bus, "dpc dashboard", "operator");
     const std::string& bench = o.bus.bench_id;
 
+    // The writer before `requests` and the server: it goes after them (reverse order), so no
+    // page's request is written through a writer that is gone.
     std::unique_ptr<bus::Writer<msg::TargetRequest>> request_writer;
-    try {
-      request_writer = participant.MakeWriter<msg::TargetRequest>(bench);
-    } catch (const std::exception& e) {
-      fmt::print(stderr, "dpc dashboard: read-only, the page cannot set the target: {}\n", e.what());
-    }
-    TargetRequests requests(request_writer.get(), o);
-    // The server before the readers: they go first (reverse order), so no callback answers
-    // through a server that is gone.
+    TargetRequests requests(o);
+    // The server before the readers: they go first, so no callback answers through a server
+    // that is gone.
     DashboardServer web(DashboardServerOptions{o.bind_address, o.port, assets},
                         [&](uint64_t client, const std::string& text) { requests.OnPageMessage(client, text); });
     requests.SetServer(&web);
 
-    auto replies = participant.MakeReader<msg::TargetReply>(bench, [&](const msg::TargetReply& r, const fdds::SampleInfo&) {
-      requests.OnReply(r.request_id().to_string(), r.accepted(), r.message().to_string(), r.revision());
-    });
-    auto targets = participant.MakeReader<msg::Target>(bench, [&](const msg::Target& m, const fdds::SampleInfo&) {
-      BenchTarget read;
-      std::string problem = bus::ReadTarget(m, &read);
-      std::lock_guard<std::mutex> lock(mutex);
-      if (!problem.empty()) return model.OnRefused("dpc_target", problem);
-      model.OnTarget(read);
-      if (!read.request_id.empty()) requests.OnReply(read.request_id, true, "", read.revision);
-    });
-    auto devices = participant.MakeReader<msg::DeviceDescription>(
-        bench, [&](const msg::DeviceDescription& m, const fdds::SampleInfo&) {
-          DeviceDescription read;
-          std::string problem = bus::ReadDevice(m, &read);
-          std::lock_guard<std::mutex> lock(mutex);
-          if (!problem.empty()) return model.OnRefused("dpc_device_description", problem);
-          model.OnDevice(read);
-        });
-    // The bench through the polarimeter's summaries, never at its own rate.
     BenchSummary summary;
-    auto summaries = participant.MakeReader<msg::BenchSummary>(
-        bench, [&](const msg::BenchSummary& m, const fdds::SampleInfo&) {
-          std::lock_guard<std::mutex> lock(mutex);
-          std::string problem = bus::ReadSummary(m, &summary);
-          if (!problem.empty()) return model.OnRefused("dpc_bench_summary", problem);
-          model.OnSummary(summary, now_s());
-        });
-    auto statuses = participant.MakeReader<msg::ControllerStatus>(
-        bench, [&](const msg::ControllerStatus& m, const fdds::SampleInfo&) {
-          ControllerStatusReport report;
-          std::string problem = bus::ReadStatus(m, &report);
-          std::lock_guard<std::mutex> lock(mutex);
-          if (!problem.empty()) return model.OnRefused("dpc_controller_status", problem);
-          model.OnStatus(report, now_s());
-        });
+    std::unique_ptr<bus::Reader<msg::TargetReply>> replies;
+    std::unique_ptr<bus::Reader<msg::Target>> targets;
+    std::unique_ptr<bus::Reader<msg::DeviceDescription>> devices;
+    std::unique_ptr<bus::Reader<msg::BenchSummary>> summaries;
+    std::unique_ptr<bus::Reader<msg::ControllerStatus>> statuses;
+    // On the participant there is (again, after it healed a stalled handshake).
+    const auto make_endpoints = [&] {
+      try {
+        request_writer = participant->MakeWriter<msg::TargetRequest>(bench);
+      } catch (const std::exception& e) {
+        fmt::print(stderr, "dpc dashboard: read-only, the page cannot set the target: {}\n", e.what());
+      }
+      requests.SetWriter(request_writer.get());
+      replies = participant->MakeReader<msg::TargetReply>(bench, [&](const msg::TargetReply& r, const fdds::SampleInfo&) {
+        requests.OnReply(r.request_id().to_string(), r.accepted(), r.message().to_string(), r.revision());
+      });
+      targets = participant->MakeReader<msg::Target>(bench, [&](const msg::Target& m, const fdds::SampleInfo&) {
+        BenchTarget read;
+        std::string problem = bus::ReadTarget(m, &read);
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!problem.empty()) return model.OnRefused("dpc_target", problem);
+        model.OnTarget(read);
+        if (!read.request_id.empty()) requests.OnReply(read.request_id, true, "", read.revision);
+      });
+      devices = participant->MakeReader<msg::DeviceDescription>(
+          bench, [&](const msg::DeviceDescription& m, const fdds::SampleInfo&) {
+            DeviceDescription read;
+            std::string problem = bus::ReadDevice(m, &read);
+            std::lock_guard<std::mutex> lock(mutex);
+            if (!problem.empty()) return model.OnRefused("dpc_device_description", problem);
+            model.OnDevice(read);
+          });
+      // The bench through the polarimeter's summaries, never at its own rate.
+      summaries = participant->MakeReader<msg::BenchSummary>(
+          bench, [&](const msg::BenchSummary& m, const fdds::SampleInfo&) {
+            std::lock_guard<std::mutex> lock(mutex);
+            std::string problem = bus::ReadSummary(m, &summary);
+            if (!problem.empty()) return model.OnRefused("dpc_bench_summary", problem);
+            model.OnSummary(summary, now_s());
+          });
+      statuses = participant->MakeReader<msg::ControllerStatus>(
+          bench, [&](const msg::ControllerStatus& m, const fdds::SampleInfo&) {
+            ControllerStatusReport report;
+            std::string problem = bus::ReadStatus(m, &report);
+            std::lock_guard<std::mutex> lock(mutex);
+            if (!problem.empty()) return model.OnRefused("dpc_controller_status", problem);
+            model.OnStatus(report, now_s());
+          });
+    };
+    const auto delete_endpoints = [&] {
+      requests.SetWriter(nullptr);
+      statuses.reset();
+      summaries.reset();
+      devices.reset();
+      targets.reset();
+      replies.reset();
+      request_writer.reset();
+    };
+    make_endpoints();
 
     const std::string host = o.bind_address.find(':') != std::string::npos ? "[" + o.bind_address + "]" : o.bind_address;
     fmt::print("dpc dashboard: http://{}:{}/\n", host == "0.0.0.0" ? "127.0.0.1" : host, web.port());
@@ -342,6 +372,7 @@ cli::ExitCode RunDashboardCommand(const DashboardOptions& o) {
         std::this_thread::sleep_for(std::min<Clock::duration>(next - Clock::now(), std::chrono::milliseconds(20)));
       }
       if (StopSignals::requested()) break;
+      participant.Heal(delete_endpoints, make_endpoints);
       next += period;
       if (next < Clock::now()) next = Clock::now() + period;  // fell behind: do not burst
       json snapshot;

@@ -257,29 +257,43 @@ cli::ExitCode RunMonitorCommand(const MonitorOptions& o) {
   try {
     std::mutex mutex;
     MonitorState state(o.lock_threshold_deg);
-    bus::BusParticipant participant(o.bus.Participant("dpc monitor", "observer"));
+    ObserverParticipant participant(o.bus, "dpc monitor", "observer");
     const std::string& bench = o.bus.bench_id;
-    auto targets = participant.MakeReader<msg::Target>(bench, [&](const msg::Target& m, const fdds::SampleInfo&) {
-      std::lock_guard<std::mutex> lock(mutex);
-      state.OnTarget(m);
-    });
-    auto samples = participant.MakeReader<msg::StokesSample>(
-        bench, [&](const msg::StokesSample& m, const fdds::SampleInfo&) {
-          std::lock_guard<std::mutex> lock(mutex);
-          state.OnSample(m);
-        });
-    auto states = participant.MakeReader<msg::WaveplateState>(
-        bench, [&](const msg::WaveplateState& m, const fdds::SampleInfo&) {
-          std::lock_guard<std::mutex> lock(mutex);
-          state.OnState(m);
-        });
-    auto statuses = participant.MakeReader<msg::ControllerStatus>(
-        bench, [&](const msg::ControllerStatus& m, const fdds::SampleInfo&) {
-          ControllerStatusReport checked;  // a status with figures no controller sends is not shown
-          if (!bus::ReadStatus(m, &checked).empty()) return;
-          std::lock_guard<std::mutex> lock(mutex);
-          state.OnStatus(m);
-        });
+    std::unique_ptr<bus::Reader<msg::Target>> targets;
+    std::unique_ptr<bus::Reader<msg::StokesSample>> samples;
+    std::unique_ptr<bus::Reader<msg::WaveplateState>> states;
+    std::unique_ptr<bus::Reader<msg::ControllerStatus>> statuses;
+    // On the participant there is (again, after it healed a stalled handshake).
+    const auto make_readers = [&] {
+      targets = participant->MakeReader<msg::Target>(bench, [&](const msg::Target& m, const fdds::SampleInfo&) {
+        std::lock_guard<std::mutex> lock(mutex);
+        state.OnTarget(m);
+      });
+      samples = participant->MakeReader<msg::StokesSample>(
+          bench, [&](const msg::StokesSample& m, const fdds::SampleInfo&) {
+            std::lock_guard<std::mutex> lock(mutex);
+            state.OnSample(m);
+          });
+      states = participant->MakeReader<msg::WaveplateState>(
+          bench, [&](const msg::WaveplateState& m, const fdds::SampleInfo&) {
+            std::lock_guard<std::mutex> lock(mutex);
+            state.OnState(m);
+          });
+      statuses = participant->MakeReader<msg::ControllerStatus>(
+          bench, [&](const msg::ControllerStatus& m, const fdds::SampleInfo&) {
+            ControllerStatusReport checked;  // a status with figures no controller sends is not shown
+            if (!bus::ReadStatus(m, &checked).empty()) return;
+            std::lock_guard<std::mutex> lock(mutex);
+            state.OnStatus(m);
+          });
+    };
+    const auto delete_readers = [&] {
+      statuses.reset();
+      states.reset();
+      samples.reset();
+      targets.reset();
+    };
+    make_readers();
     fmt::print(stderr, "dpc monitor: domain {}, bench {}{}\n", o.bus.domain_id, bench,
                o.duration_s > 0 ? fmt::format(", {:g} s", o.duration_s) : ", Ctrl-C to stop");
 
@@ -293,6 +307,7 @@ cli::ExitCode RunMonitorCommand(const MonitorOptions& o) {
         std::this_thread::sleep_for(std::min<Clock::duration>(next - Clock::now(), std::chrono::milliseconds(20)));
       }
       if (StopSignals::requested()) break;
+      participant.Heal(delete_readers, make_readers);
       const auto now = Clock::now();
       std::string line;
       {

@@ -143,10 +143,11 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
                            {"start_time_ns", std::to_string(WallNs())}}});
     if (!scenario_text.empty()) writer.WriteMetadata({"scenario", {{"path", o.scenario_path}, {"text", scenario_text}}});
 
-    bus::BusParticipant participant(o.bus.Participant("dpc record", "observer"));
+    ObserverParticipant participant(o.bus, "dpc record", "observer");
     struct Channel {
       uint16_t id = 0;
       uint32_t sequence = 0;  ///< of the messages kept
+      std::string topic;
       std::unique_ptr<bus::RawReader> reader;
     };
     std::vector<Channel> channels;
@@ -160,9 +161,18 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
                                                    {{"partition", bus::PartitionFor<Message>(o.bus.bench_id)}});
         if constexpr (std::is_same_v<Message, msg::StokesSample>) sample_channel = channel;
         if constexpr (std::is_same_v<Message, msg::DeviceDescription>) device_channel = channel;
-        channels.push_back({channel, 0, participant.MakeRawReader<Message>(o.bus.bench_id)});
+        channels.push_back({channel, 0, std::string(topic.name), nullptr});
       });
     }
+    // The readers, on the participant there is (again, after it healed a stalled handshake).
+    const auto make_readers = [&] {
+      for (Channel& channel : channels) {
+        WithTopicMessage(channel.topic, [&](auto tag) {
+          channel.reader = participant->MakeRawReader<typename decltype(tag)::type>(o.bus.bench_id);
+        });
+      }
+    };
+    make_readers();
     fmt::print(stderr, "dpc record: {} topic{} of bench {} (domain {}) → {}{}\n", channels.size(),
                channels.size() == 1 ? "" : "s", o.bus.bench_id, o.bus.domain_id, o.output_path,
                o.duration_s > 0 ? fmt::format(" for {:g} s", o.duration_s) : ", Ctrl-C to stop");
@@ -170,11 +180,12 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
     SampleAccounting samples;
     std::string last_device;  // the device description's payload last kept as metadata
     uint64_t lost = 0;        // messages Fast DDS reported lost (sent, never taken), over every topic
+    uint64_t lost_before = 0;  // of the readers a heal deleted
     std::vector<bus::RawSample> taken;
     // Drains every reader into the file: each message with log time = its reception, publish
     // time = its writer's source timestamp.
     const auto drain = [&] {
-      lost = 0;
+      lost = lost_before;
       for (Channel& channel : channels) {
         taken.clear();
         channel.reader->TakeAll(&taken);
@@ -204,6 +215,18 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
     for (;;) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       drain();
+      const bool healed = participant.Heal(
+          [&] {
+            drain();  // what the old readers hold is kept
+            lost_before = lost;
+            for (Channel& channel : channels) channel.reader.reset();
+          },
+          make_readers);
+      if (healed) {
+        // The gap it leaves shows in the samples' accounting; the file says when it was.
+        writer.WriteMetadata({"participant_reload",
+                              {{"cause", "handshake stall"}, {"log_time_ns", std::to_string(WallNs())}}});
+      }
       const auto now = Clock::now();
       const double elapsed_s = std::chrono::duration<double>(now - start).count();
       const bool done = StopSignals::requested() || (o.duration_s > 0 && elapsed_s >= o.duration_s);
@@ -229,7 +252,8 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
                            {"samples", std::to_string(samples.samples)},
                            {"samples_missing", std::to_string(samples.missing)},
                            {"sample_restarts", std::to_string(samples.restarts)},
-                           {"lost_reported_by_dds", std::to_string(lost)}}});
+                           {"lost_reported_by_dds", std::to_string(lost)},
+                           {"participant_reloads", std::to_string(participant.reloads())}}});
     writer.Close();
     fmt::print(stderr, "dpc record: {} messages in {} chunks, {:.1f} MB → {}\n", writer.messages(), writer.chunks(),
                static_cast<double>(writer.bytes()) / 1e6, o.output_path);

@@ -110,18 +110,23 @@ cli::ExitCode RunEchoOf(const TopicEchoOptions& o, const BusTopic& topic) {
   std::condition_variable arrived;
   std::deque<std::string> lines;
   int64_t accepted = 0;
-  bus::BusParticipant participant(o.bus.Participant("dpc topic echo", "observer"));
-  auto reader = participant.MakeReader<Message>(
-      BenchFilter(o.bus.bench_id), [&](const Message& message, const fdds::SampleInfo&) {
-        std::string line = o.json ? ToJson(message).dump(-1, ' ', false,
-                                                         nlohmann::json::error_handler_t::replace)
-                                  : ToText(message);
-        std::lock_guard<std::mutex> lock(mutex);
-        if (o.count > 0 && accepted >= o.count) return;
-        ++accepted;
-        lines.push_back(std::move(line));
-        arrived.notify_one();
-      });
+  ObserverParticipant participant(o.bus, "dpc topic echo", "observer");
+  std::unique_ptr<bus::Reader<Message>> reader;
+  // On the participant there is (again, after it healed a stalled handshake).
+  const auto make_reader = [&] {
+    reader = participant->MakeReader<Message>(
+        BenchFilter(o.bus.bench_id), [&](const Message& message, const fdds::SampleInfo&) {
+          std::string line = o.json ? ToJson(message).dump(-1, ' ', false,
+                                                           nlohmann::json::error_handler_t::replace)
+                                    : ToText(message);
+          std::lock_guard<std::mutex> lock(mutex);
+          if (o.count > 0 && accepted >= o.count) return;
+          ++accepted;
+          lines.push_back(std::move(line));
+          arrived.notify_one();
+        });
+  };
+  make_reader();
   const auto start = Clock::now();
   int64_t printed = 0;
   bool output_ok = true;
@@ -141,6 +146,7 @@ cli::ExitCode RunEchoOf(const TopicEchoOptions& o, const BusTopic& topic) {
     }
     if (o.count > 0 && printed >= o.count) break;
     if (StopSignals::requested()) break;
+    participant.Heal([&] { reader.reset(); }, make_reader);
     if (o.timeout_s > 0 && SecondsSince(start) >= o.timeout_s) {
       if (printed == 0) {
         reader.reset();
@@ -173,14 +179,20 @@ cli::ExitCode RunHzOf(const TopicHzOptions& o, const BusTopic& topic) {
   std::mutex mutex;
   std::vector<Clock::time_point> arrivals;
   arrivals.reserve(1 << 16);
-  bus::BusParticipant participant(o.bus.Participant("dpc topic hz", "observer"));
-  auto reader = participant.MakeReader<Message>(
-      BenchFilter(o.bus.bench_id), [&](const Message&, const fdds::SampleInfo&) {
-        const auto now = Clock::now();
-        std::lock_guard<std::mutex> lock(mutex);
-        arrivals.push_back(now);
-      });
+  ObserverParticipant participant(o.bus, "dpc topic hz", "observer");
+  std::unique_ptr<bus::Reader<Message>> reader;
+  // On the participant there is (again, after it healed a stalled handshake).
+  const auto make_reader = [&] {
+    reader = participant->MakeReader<Message>(BenchFilter(o.bus.bench_id), [&](const Message&, const fdds::SampleInfo&) {
+      const auto now = Clock::now();
+      std::lock_guard<std::mutex> lock(mutex);
+      arrivals.push_back(now);
+    });
+  };
+  make_reader();
+  const auto heal = [&] { participant.Heal([&] { reader.reset(); }, make_reader); };
   const auto has_sample = [&] {
+    heal();
     std::lock_guard<std::mutex> lock(mutex);
     return !arrivals.empty();
   };
@@ -205,6 +217,7 @@ cli::ExitCode RunHzOf(const TopicHzOptions& o, const BusTopic& topic) {
     while (Clock::now() < window_end && !StopSignals::requested()) {
       std::this_thread::sleep_for(std::min<Clock::duration>(window_end - Clock::now(),
                                                            std::chrono::milliseconds(20)));
+      heal();
     }
     if (StopSignals::requested()) break;
     {

@@ -14,6 +14,12 @@
 // time, up to kMaxBackoffNs, until it makes progress again (then a new stall heals after
 // kStallNs again). Pure policy (no clock, no DDS): the service gives it the times and the
 // stalled peers (ParticipantMaker::HandshakeStalled).
+//
+// An observer (a `dpc` command: record, monitor, dashboard, topic) has no progress of its own to
+// weigh: a stalled peer is one it hears nothing from, and its reload costs only its own view for
+// about a second. Its `progress_ns` is when it last had no handshake pending (ObserverParticipant
+// in tools/dpc/bus_tool_support.h), so any stall heals after kStallNs, the back-off runs while
+// some handshake stays pending, and it starts over once none is.
 
 #include <algorithm>
 #include <cstdint>
@@ -24,6 +30,12 @@ namespace dpc::bus {
 
 class HandshakeWatchdog {
  public:
+  /// Who starves, for the log line: a service (no progress of its own), or an observer (it
+  /// hears nothing from the stalled peers).
+  enum class Starving { kService, kObserver };
+
+  explicit HandshakeWatchdog(Starving starving = Starving::kService) : starving_(starving) {}
+
   static constexpr int64_t kStallNs = 10'000'000'000;         ///< a pending handshake, and no progress
   static constexpr int64_t kCheckPeriodNs = 1'000'000'000;    ///< Due() at most this often
   static constexpr int64_t kFirstBackoffNs = 30'000'000'000;  ///< after a reload, the next one at the earliest
@@ -53,10 +65,14 @@ class HandshakeWatchdog {
     if (stalled.size() > kMaxNamed) peers += " and " + std::to_string(stalled.size() - kMaxNamed) + " more";
     ++reloads_;
     not_before_ns_ = now_ns + backoff_ns_;
+    const std::string starved =
+        starving_ == Starving::kService
+            ? "and this service has made no progress for " + std::to_string((now_ns - progress_ns) / 1'000'000'000) +
+                  " s"
+            : "so nothing of theirs reaches this command";
     std::string why = "the security handshake with " + peers + " has had no outcome for " +
-                      std::to_string(kStallNs / 1'000'000'000) + " s or more, and this service has made no " +
-                      "progress for " + std::to_string((now_ns - progress_ns) / 1'000'000'000) +
-                      " s (a Fast DDS 2.9 handshake stall, or a peer that never answers): a new participant, "
+                      std::to_string(kStallNs / 1'000'000'000) + " s or more, " + starved +
+                      " (a Fast DDS 2.9 handshake stall, or a peer that never answers): a new participant, "
                       "handshaken afresh; while nothing improves, the next such reload not before " +
                       std::to_string(backoff_ns_ / 1'000'000'000) + " s";
     backoff_ns_ = std::min(2 * backoff_ns_, kMaxBackoffNs);
@@ -68,6 +84,7 @@ class HandshakeWatchdog {
 
  private:
   static constexpr size_t kMaxNamed = 3;
+  Starving starving_;
   int64_t next_check_ns_ = 0;
   int64_t not_before_ns_ = 0;
   int64_t backoff_ns_ = kFirstBackoffNs;

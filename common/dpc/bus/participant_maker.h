@@ -28,8 +28,10 @@ class ParticipantMaker {
   /// A line for the service's log: an error, or information.
   using Log = std::function<void(bool error, const std::string& text)>;
 
-  ParticipantMaker(BusOptions options, std::function<void(const PeerEvent&)> on_peer, Log log)
-      : options_(std::move(options)), on_peer_(std::move(on_peer)), log_(std::move(log)) {}
+  /// `starving`: whose starvation the handshake watchdog reports (HandshakeWatchdog).
+  ParticipantMaker(BusOptions options, std::function<void(const PeerEvent&)> on_peer, Log log,
+                   HandshakeWatchdog::Starving starving = HandshakeWatchdog::Starving::kService)
+      : options_(std::move(options)), on_peer_(std::move(on_peer)), log_(std::move(log)), watchdog_(starving) {}
 
   /// At start: throws as BusParticipant does (the service cannot start).
   std::unique_ptr<BusParticipant> Make() const { return std::make_unique<BusParticipant>(options_, on_peer_); }

@@ -1,5 +1,6 @@
 // HandshakeWatchdog: when a secured service makes its participant again by itself (a handshake
-// with no outcome, and no progress, both for 10 s), and how often at most.
+// with no outcome, and no progress, both for 10 s), and how often at most; and what an observer
+// (a `dpc` command) is told.
 #include "dpc/bus/handshake_watchdog.h"
 
 #include <gtest/gtest.h>
@@ -59,6 +60,21 @@ TEST(HandshakeWatchdogTest, NamesAtMostThreePeersAndCountsTheRest) {
   const std::string why = watchdog.Judge(100 * kS, 0, {"a (1)", "b (2)", "c (3)", "d (4)", "e (5)"});
   EXPECT_NE(why.find("a (1), b (2), c (3) and 2 more"), std::string::npos) << why;
   EXPECT_EQ(why.find("d (4)"), std::string::npos) << why;
+}
+
+TEST(HandshakeWatchdogTest, AnObserverIsToldThatItHearsNothingFromTheStalledPeer) {
+  HandshakeWatchdog watchdog(HandshakeWatchdog::Starving::kObserver);
+  // Its progress: when it last had no handshake pending (here: 11 s ago).
+  EXPECT_EQ(watchdog.Judge(100 * kS, 91 * kS, kGhost), "");
+  const std::string why = watchdog.Judge(100 * kS, 89 * kS, kGhost);
+  EXPECT_NE(why.find("01.0f.aa (dpc-test-ghost) has had no outcome for 10 s or more, so nothing of theirs reaches "
+                     "this command (a Fast DDS 2.9 handshake stall"),
+            std::string::npos)
+      << why;
+  EXPECT_EQ(why.find("this service"), std::string::npos) << why;
+  // Every handshake settled since: the back-off starts over.
+  EXPECT_EQ(watchdog.Judge(105 * kS, 104 * kS, kNone), "");
+  EXPECT_NE(watchdog.Judge(116 * kS, 104 * kS, kGhost), "");
 }
 
 }  // namespace
