@@ -86,10 +86,9 @@ class ControllerService final : public Service {
       // description and the polarimeter's samples, which a stalled handshake with either
       // withholds. The controller answers no sample until its new readers are matched; the
       // driver meanwhile treats it as silent.
-      if (const bool sighup = TakeReloadRequest();
-          sighup || maker_.HandshakeStalled(*participant_, MonotonicNs(), progress_ns_.load())) {
-        maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); },
-                      sighup ? "SIGHUP" : "handshake stall");
+      if (const auto cause =
+              maker_.ReloadCause(TakeReloadRequest(), *participant_, MonotonicNs(), progress_ns_.load())) {
+        maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); }, *cause);
       }
       std::lock_guard<std::mutex> lock(mutex_);
       const ControllerStatusReport status =

@@ -119,14 +119,13 @@ class DriverService final : public Service {
     while (!stopped()) {
       // A SIGHUP, or a handshake stall: progress is a state that applies a command (holding is
       // none), which a controller or the polarimeter whose handshake with this driver stalled
-      // withholds. No tick runs meanwhile and the controllers' commands go nowhere until the
-      // new endpoints are matched: the waveplates stay where they are; then the usual rules
-      // (silence, hold, failover) apply to what arrives.
-      if (const bool sighup = TakeReloadRequest();
-          sighup || maker_.HandshakeStalled(*participant_, MonotonicNs(), progress_ns_)) {
+      // withholds. Secured, the ticks go on on the old participant while the new one
+      // authenticates the peers (ParticipantMaker::Reload). Once the endpoints move, the
+      // controllers' commands go nowhere until the new endpoints are matched: the waveplates stay
+      // where they are; then the usual rules (silence, hold, failover) apply to what arrives.
+      if (const auto cause = maker_.ReloadCause(TakeReloadRequest(), *participant_, MonotonicNs(), progress_ns_)) {
         lock.unlock();
-        maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); },
-                      sighup ? "SIGHUP" : "handshake stall");
+        maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); }, *cause);
         lock.lock();
       }
       const int64_t now_ns = MonotonicNs();

@@ -65,10 +65,9 @@ void DdsBenchLink::WriteSample(const BenchSample& sample) {
 void DdsBenchLink::Publish(const BenchSample& sample) {
   // A SIGHUP, or a handshake stall: progress is a valid state of the driver's, which a stalled
   // handshake with it withholds.
-  if (const bool sighup = reload_requested_.exchange(false);
-      sighup || maker_.HandshakeStalled(*participant_, MonotonicNs(), progress_ns_.load(std::memory_order_relaxed))) {
-    maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); },
-                  sighup ? "SIGHUP" : "handshake stall");
+  if (const auto cause = maker_.ReloadCause(reload_requested_.exchange(false), *participant_, MonotonicNs(),
+                                            progress_ns_.load(std::memory_order_relaxed))) {
+    maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); }, *cause);
   }
   WriteSample(sample);
   if (!summary_writer_) return;

@@ -40,8 +40,9 @@ class DdsBenchLink final : public BenchLink {
 
   /// Thread-safe: the bench stops at its next sample; a lockstep wait ends at once.
   void Stop();
-  /// Thread-safe (SIGHUP): the next Publish makes the participant and the endpoints again
-  /// (bus::ParticipantMaker); the bench's loop pauses for that long.
+  /// Thread-safe (SIGHUP): the next Publish makes the participant again, and a later one moves
+  /// the endpoints to it (bus::ParticipantMaker::Reload: secured, once it has authenticated the
+  /// peers); the bench's loop pauses while the new endpoints are matched.
   void RequestReload() { reload_requested_.store(true); }
   const bus::BusParticipant& participant() const { return *participant_; }
 

@@ -451,6 +451,10 @@ class Ghost {
     }  // the participant is deleted: its locators close
     close(listener);
     if (announcement_.empty()) throw std::runtime_error("ghost: no announcement of its participant in 5 s");
+    // Its deletion is processed by every service before the first replay: a replay that arrives
+    // first is taken for the live participant, whose removal then comes after it, and later
+    // replays (the same sequence number) were not discovered again (seen once in ten runs).
+    std::this_thread::sleep_for(500ms);
     sender_ = std::thread([this] { Announce(); });
   }
   ~Ghost() {
@@ -532,7 +536,26 @@ TEST_F(BenchSecurityTest, AHandshakeWithoutOutcomeHealsAStarvedServiceAndNeverRe
   EXPECT_NE(driver.Log().find("(dpc-test-ghost) has had no outcome"), std::string::npos) << driver.Log();
 
   Start(DPC_CONTROLLER_BINARY, {"--id", "main", "--priority", "10"}, "controller_main_again");
-  ASSERT_TRUE(Eventually([&] { return SoonObeys("main", 100ms); }, 20s)) << Logs();
+  // The test's observer sees the bench through its own handshake with the driver's new
+  // participant, which can stall as any can (Fast DDS 2.9; seen once in about twenty runs): it
+  // then makes its participant again, as a `dpc` command would.
+  const auto observer_stalled = [&] {
+    for (const std::string& peer : participant_->PendingHandshakes(5'000'000'000)) {
+      if (peer.find(ghost.guid()) == std::string::npos) return peer;
+    }
+    return std::string();
+  };
+  ASSERT_TRUE(Eventually(
+      [&] {
+        if (const std::string peer = observer_stalled(); !peer.empty()) {
+          std::fprintf(stderr, "note: the test's observer had no outcome of its handshake with %s in 5 s: "
+                               "a new participant\n", peer.c_str());
+          RestartObserver({g_pki, "observer"});
+        }
+        return SoonObeys("main", 100ms);
+      },
+      30s))
+      << Logs();
   std::this_thread::sleep_for(2s);
   EXPECT_EQ(Count(driver.Log(), stall_reload), reloads_before + 1) << "one reload, then progress";
   EXPECT_TRUE(driver.running());
@@ -546,10 +569,12 @@ TEST_F(BenchSecurityTest, ADpcCommandHealsAStalledHandshakeAndKeepsRecording) {
   Ghost ghost(48);
   const std::string file = dir_ + "/healed.mcap";
   const int64_t start_ns = MonotonicNs();
-  Process& record = Start(DPC_BINARY, {"record", "--output", file, "--duration-s", "18"}, "record");
-  Process& monitor = Start(DPC_BINARY, {"monitor", "--lines", "--rate-hz", "2", "--duration-s", "18"}, "monitor");
+  Process& record = Start(DPC_BINARY, {"record", "--output", file, "--duration-s", "22"}, "record");
+  Process& monitor = Start(DPC_BINARY, {"monitor", "--lines", "--rate-hz", "2", "--duration-s", "22"}, "monitor");
   const std::string reloaded = "dpc record: reload (handshake stall): the endpoints are on the new participant";
-  ASSERT_TRUE(Eventually([&] { return Count(record.Log(), reloaded) > 0; }, 16s))
+  // The stall is judged after 10 s; the endpoints move once the new participant has
+  // authenticated the bench (about 1 s), at most 3 s later.
+  ASSERT_TRUE(Eventually([&] { return Count(record.Log(), reloaded) > 0; }, 20s))
       << "dpc record did not heal\n" << record.Log();
   const double after_s = (MonotonicNs() - start_ns) * 1e-9;
   std::printf("dpc record made its participant again %.1f s after it started\n", after_s);

@@ -47,11 +47,13 @@ bool ObserverParticipant::Heal(const std::function<void()>& delete_endpoints,
                                const std::function<void()>& make_endpoints) {
   if (!participant_->secure()) return false;
   const int64_t now_ns = MonotonicNs();
-  if (now_ns < next_look_ns_) return false;
-  next_look_ns_ = now_ns + bus::HandshakeWatchdog::kCheckPeriodNs;
-  if (participant_->PendingHandshakes(0).empty()) settled_ns_ = now_ns;
-  if (!maker_.HandshakeStalled(*participant_, now_ns, settled_ns_)) return false;
-  if (!maker_.Reload(&participant_, delete_endpoints, make_endpoints, "handshake stall")) return false;
+  if (!maker_.preparing()) {
+    if (now_ns < next_look_ns_) return false;
+    next_look_ns_ = now_ns + bus::HandshakeWatchdog::kCheckPeriodNs;
+    if (participant_->PendingHandshakes(0).empty()) settled_ns_ = now_ns;
+  }
+  const auto cause = maker_.ReloadCause(false, *participant_, now_ns, settled_ns_);
+  if (!cause || !maker_.Reload(&participant_, delete_endpoints, make_endpoints, *cause)) return false;
   ++reloads_;
   return true;
 }

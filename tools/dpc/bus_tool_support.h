@@ -45,7 +45,8 @@ class ObserverParticipant {
   bus::BusParticipant* operator->() const { return participant_.get(); }
 
   /// From the command's loop, on the thread that owns the endpoints, as often as convenient (it
-  /// looks at most once a second). If a handshake stalled: a new participant, then
+  /// looks at most once a second). If a handshake stalled: a new participant; once it has
+  /// authenticated the old one's peers (at most 3 s later; the old one serves meanwhile),
   /// `delete_endpoints` (the old participant's; readers first), the participant replaced, and
   /// `make_endpoints` on the new one; true then. False (nothing changed) otherwise, and
   /// without DDS Security.

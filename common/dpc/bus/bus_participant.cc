@@ -7,6 +7,8 @@
 #include <utility>
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastrtps/attributes/LibrarySettingsAttributes.h>
+#include <fastrtps/xmlparser/XMLProfileManager.h>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fmt/format.h>
 
@@ -131,6 +133,7 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
         refused_.erase(prefix);
         pending_.erase(prefix);
         settled_.erase(prefix);
+        authenticated_.erase(prefix);
         kind = PeerEvent::Kind::kGone;
       }
     }
@@ -147,6 +150,11 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
       if (auto found = names_.find(prefix); found != names_.end()) name = found->second;
       pending_.erase(prefix);
       if (settled_.size() < kMaxNames) settled_.insert(prefix);
+      if (refused) {
+        authenticated_.erase(prefix);
+      } else if (authenticated_.size() < kMaxNames) {
+        authenticated_.insert(prefix);
+      }
       // A refused participant is handshaken and refused again at each of its announcements
       // (every second): it is reported once, until it is gone.
       if (refused) {
@@ -178,6 +186,12 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
     auto found = partitions_.find(writer);
     return found == partitions_.end() ? std::string() : found->second;
   }
+  std::vector<std::string> AuthenticatedPeers() const {
+    std::vector<std::string> peers;
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& prefix : authenticated_) peers.push_back(SourceName(SourceOf(prefix)));
+    return peers;
+  }
   std::vector<std::string> PendingHandshakes(int64_t older_than_ns) const {
     const int64_t now_ns = MonotonicNs();
     std::vector<std::string> peers;
@@ -202,6 +216,8 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
   /// bounded by kMaxNames; a participant gone leaves both.
   std::map<eprosima::fastrtps::rtps::GuidPrefix_t, int64_t> pending_;
   std::set<eprosima::fastrtps::rtps::GuidPrefix_t> settled_;
+  /// Secure only: those authenticated (a subset of settled_).
+  std::set<eprosima::fastrtps::rtps::GuidPrefix_t> authenticated_;
 };
 
 std::string PrintableName(const std::string& name) {
@@ -275,6 +291,19 @@ BusParticipant::BusParticipant(const BusOptions& options, std::function<void(con
     qos.properties().properties().emplace_back(name, value);
   }
   secure_ = options.security.enabled();
+  if (secure_) {
+    // A secured reload runs the new participant beside the old one, authenticated with each
+    // other, and then deletes the old one (ParticipantMaker::Reload). Without intraprocess
+    // delivery what one sends the other (its goodbye, handshake and crypto messages) goes
+    // through the transports and is taken on the receiver's own threads, never inside the
+    // sender's Fast DDS locks on the sender's thread. (A move of the endpoints that never
+    // completed, with no log line from the old participant's deletion, was seen once in about
+    // sixty secured reloads with intraprocess delivery on; none since in the security process
+    // tests.) The setting is Fast DDS's, process-wide; a secured service has one participant.
+    eprosima::fastrtps::LibrarySettingsAttributes library;
+    library.intraprocess_delivery = eprosima::fastrtps::INTRAPROCESS_OFF;
+    eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(library);
+  }
   // What a killed process left in /dev/shm delays the discovery of the one that replaces it.
   if (ProfilesUseSharedMemory(profiles_file_)) shm_cleanup_ = RemoveStaleShmFiles();
   discovery_ = std::make_unique<DiscoveryListener>(std::move(on_peer), secure_);
@@ -288,6 +317,10 @@ BusParticipant::BusParticipant(const BusOptions& options, std::function<void(con
                                          options.domain_id, profiles_file_));
   }
 }
+
+std::vector<std::string> BusParticipant::AuthenticatedPeers() const { return discovery_->AuthenticatedPeers(); }
+
+std::string BusParticipant::guid_prefix() const { return SourceName(SourceOf(participant_->guid().guidPrefix)); }
 
 std::vector<std::string> BusParticipant::PendingHandshakes(int64_t older_than_ns) const {
   return discovery_->PendingHandshakes(older_than_ns);

@@ -431,6 +431,13 @@ class BusParticipant {
   /// can stall for good: HandshakeWatchdog.)
   std::vector<std::string> PendingHandshakes(int64_t older_than_ns) const;
 
+  /// With DDS Security: the remote participants authenticated (and not gone since), as GUID
+  /// prefixes written as SourceName writes them. Empty on an open participant.
+  std::vector<std::string> AuthenticatedPeers() const;
+
+  /// This participant's GUID prefix, written as SourceName writes it.
+  std::string guid_prefix() const;
+
   eprosima::fastdds::dds::DomainParticipant* raw() const { return participant_; }
   const std::string& profiles_file() const { return profiles_file_; }
   /// With a shared-memory profile: the stale Fast DDS files removed before the participant was

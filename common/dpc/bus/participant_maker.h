@@ -6,22 +6,50 @@
 //
 // A reload (Reload) makes the new participant first, while the old one still runs: credentials
 // or profiles that do not give a participant (a tampered grant, a missing key, a broken profile)
-// are refused and the service keeps running on the participant it has. Only then are the
-// service's endpoints deleted (readers first: their callbacks end before anything they use
-// goes), the old participant replaced, and the endpoints made again on the new one.
+// are refused and the service keeps running on the participant it has. With DDS Security the
+// service then keeps running on the old participant while the new one discovers and
+// authenticates the peers (about 1 s on loopback): the endpoints move only once the new
+// participant has authenticated every peer the old one had (PeersNotYetAuthenticated), or after
+// kMaxPrepareNs. Moving them: the service's endpoints deleted (readers first: their callbacks
+// end before anything they use goes), the old participant replaced, and the endpoints made again
+// on the new one, whose handshakes are done: only the endpoints' own discovery remains.
 //
 // A secured service also reloads by itself when a peer's handshake has stalled and the service
 // starves for it (HandshakeStalled, HandshakeWatchdog).
 
+#include <algorithm>
+#include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
+#include "dpc/bench/clock.h"
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/handshake_watchdog.h"
 
 namespace dpc::bus {
+
+/// Of the peers `running` has authenticated (GUID prefixes, BusParticipant::AuthenticatedPeers),
+/// other than `fresh_self` (the new participant: the old one authenticates it too), how many
+/// `fresh` has not authenticated yet; their count in `peers`. A reload moves the endpoints when
+/// this is 0. `names`, if given: those peers.
+inline size_t PeersNotYetAuthenticated(const std::vector<std::string>& running, const std::vector<std::string>& fresh,
+                                       const std::string& fresh_self, size_t* peers,
+                                       std::vector<std::string>* names = nullptr) {
+  size_t missing = 0;
+  *peers = 0;
+  for (const std::string& peer : running) {
+    if (peer == fresh_self) continue;
+    ++*peers;
+    if (std::find(fresh.begin(), fresh.end(), peer) != fresh.end()) continue;
+    ++missing;
+    if (names != nullptr) names->push_back(peer);
+  }
+  return missing;
+}
 
 class ParticipantMaker {
  public:
@@ -36,31 +64,77 @@ class ParticipantMaker {
   /// At start: throws as BusParticipant does (the service cannot start).
   std::unique_ptr<BusParticipant> Make() const { return std::make_unique<BusParticipant>(options_, on_peer_); }
 
-  /// A reload, on the thread that owns `*participant` (no reader's callback may use it while it
-  /// is replaced: `delete_endpoints` deletes the readers first). A new participant; if it cannot
-  /// be made, the error is logged and nothing changes (false). Else `delete_endpoints`, the old
-  /// participant replaced by the new one, `make_endpoints` (on it), and true.
-  /// `cause`: what the log lines say ("reload (SIGHUP): …").
+  static constexpr int64_t kMaxPrepareNs = 3'000'000'000;  ///< the endpoints move then at the latest
+  static constexpr int64_t kPrepareCheckNs = 5'000'000;     ///< looks at the handshakes at most this often
+
+  /// A reload, from the service's loop, on the thread that owns `*participant` (no reader's
+  /// callback may use it while it is replaced: `delete_endpoints` deletes the readers first).
+  /// `cause` (what the log lines say, "reload (SIGHUP): …") asks for one now: a new participant;
+  /// if it cannot be made, the error is logged and nothing changes. An empty `cause` goes on
+  /// with the reload being prepared (call it so while preparing()). Open, the endpoints move at
+  /// once; with DDS Security once the new participant has authenticated the old one's peers, or
+  /// after kMaxPrepareNs: `delete_endpoints`, the old participant replaced by the new one,
+  /// `make_endpoints` (on it). True when the endpoints moved.
   bool Reload(std::unique_ptr<BusParticipant>* participant, const std::function<void()>& delete_endpoints,
-              const std::function<void()>& make_endpoints, const std::string& cause = "SIGHUP") const {
-    const std::string credentials =
-        options_.security.enabled()
-            ? "identity " + options_.security.identity + " of " + options_.security.directory
-            : std::string("no DDS Security");
-    std::unique_ptr<BusParticipant> fresh;
-    try {
-      fresh = Make();
-    } catch (const std::exception& e) {
-      log_(true, "reload (" + cause + ") refused, the running participant is kept: " + e.what() + " (" +
-                     credentials + ")");
-      return false;
+              const std::function<void()>& make_endpoints, const std::string& cause) {
+    const int64_t now_ns = MonotonicNs();
+    if (!cause.empty()) {
+      const std::string credentials =
+          options_.security.enabled()
+              ? "identity " + options_.security.identity + " of " + options_.security.directory
+              : std::string("no DDS Security");
+      try {
+        fresh_ = Make();  // a reload being prepared is replaced (credentials changed again)
+      } catch (const std::exception& e) {
+        log_(true, "reload (" + cause + ") refused, the running participant is kept: " + e.what() + " (" +
+                       credentials + ")");
+        return false;
+      }
+      cause_ = cause;
+      prepared_since_ns_ = now_ns;
+      next_check_ns_ = 0;
+      log_(false, "reload (" + cause + "): a new participant (" + credentials + "); " +
+                      (fresh_->secure() ? "the endpoints move to it once it has authenticated the peers of the "
+                                          "running one (at most " + std::to_string(kMaxPrepareNs / 1'000'000'000) +
+                                          " s)"
+                                        : "its endpoints follow"));
     }
-    log_(false, "reload (" + cause + "): a new participant (" + credentials + "); its endpoints follow");
+    if (fresh_ == nullptr) return false;
+    std::string how;
+    if (fresh_->secure()) {
+      if (now_ns < next_check_ns_) return false;
+      next_check_ns_ = now_ns + kPrepareCheckNs;
+      size_t peers = 0;
+      std::vector<std::string> not_yet;
+      const size_t missing = PeersNotYetAuthenticated((*participant)->AuthenticatedPeers(),
+                                                      fresh_->AuthenticatedPeers(), fresh_->guid_prefix(), &peers,
+                                                      &not_yet);
+      const int64_t waited_ns = now_ns - prepared_since_ns_;
+      if (missing > 0 && waited_ns < kMaxPrepareNs) return false;
+      how = " (after " + std::to_string(waited_ns / 1'000'000) + " ms: it authenticated " +
+            std::to_string(peers - missing) + " of the " + std::to_string(peers) + " peers of the old one";
+      for (size_t i = 0; i < not_yet.size() && i < 3; ++i) how += (i == 0 ? "; not yet " : ", ") + not_yet[i];
+      how += ")";
+    }
     delete_endpoints();
-    *participant = std::move(fresh);  // the old participant goes
+    *participant = std::move(fresh_);  // the old participant goes
     make_endpoints();
-    log_(false, "reload (" + cause + "): the endpoints are on the new participant");
+    log_(false, "reload (" + cause_ + "): the endpoints are on the new participant" + how);
     return true;
+  }
+
+  /// Whether a reload is being prepared: call Reload with an empty cause until it returns true.
+  bool preparing() const { return fresh_ != nullptr; }
+
+  /// What a service's loop asks each turn: a reload to begin ("SIGHUP" if `sighup`, "handshake
+  /// stall" if HandshakeStalled), one being prepared to go on with (""), or nothing to do
+  /// (nullopt). The cause goes to Reload.
+  std::optional<std::string> ReloadCause(bool sighup, const BusParticipant& participant, int64_t now_ns,
+                                         int64_t progress_ns) {
+    if (sighup) return "SIGHUP";
+    if (HandshakeStalled(participant, now_ns, progress_ns)) return "handshake stall";
+    if (preparing()) return "";
+    return std::nullopt;
   }
 
   /// As often as convenient (it looks at most once a second; cheap otherwise): with DDS
@@ -69,7 +143,7 @@ class ParticipantMaker {
   /// long. If so, a line in the log says so, and the service should Reload(…, "handshake stall")
   /// now (HandshakeWatchdog's back-off is running).
   bool HandshakeStalled(const BusParticipant& participant, int64_t now_ns, int64_t progress_ns) {
-    if (!participant.secure() || !watchdog_.Due(now_ns)) return false;
+    if (!participant.secure() || preparing() || !watchdog_.Due(now_ns)) return false;
     const std::string why =
         watchdog_.Judge(now_ns, progress_ns, participant.PendingHandshakes(HandshakeWatchdog::kStallNs));
     if (why.empty()) return false;
@@ -82,6 +156,10 @@ class ParticipantMaker {
   std::function<void(const PeerEvent&)> on_peer_;
   Log log_;
   HandshakeWatchdog watchdog_;
+  std::unique_ptr<BusParticipant> fresh_;  ///< a reload being prepared
+  std::string cause_;
+  int64_t prepared_since_ns_ = 0;
+  int64_t next_check_ns_ = 0;
 };
 
 }  // namespace dpc::bus
