@@ -49,11 +49,12 @@ class TargetRequests {
   /// Before any message or reply arrives; `server` outlives the readers that call OnReply.
   void SetServer(DashboardServer* server) { server_ = server; }
 
-  /// The writer of the requests from now on (null: none, the page's requests are refused); a
-  /// request being written is written first.
-  void SetWriter(bus::Writer<msg::TargetRequest>* writer) {
+  /// The writer of the requests from now on; a request being written is written first. Null:
+  /// none, and the page's requests are refused with `refusal` (why there is none).
+  void SetWriter(bus::Writer<msg::TargetRequest>* writer, std::string refusal = {}) {
     std::lock_guard<std::mutex> lock(writer_mutex_);
     writer_ = writer;
+    refusal_ = std::move(refusal);
   }
 
   /// On the server's thread: a page's message.
@@ -63,11 +64,7 @@ class TargetRequests {
     const std::optional<TargetConfig> target = ParsePageTargetRequest(text, &tag, &error);
     if (!target) return Answer(client, tag, false, error, 0);
     std::lock_guard<std::mutex> writer_lock(writer_mutex_);
-    if (writer_ == nullptr) {
-      return Answer(client, tag, false,
-                    "this dashboard may not publish target requests (its DDS identity has no such permission: "
-                    "give --identity operator)", 0);
-    }
+    if (writer_ == nullptr) return Answer(client, tag, false, refusal_, 0);
     const double now_s = Now();
     std::string request_id;
     {
@@ -157,6 +154,7 @@ class TargetRequests {
   DashboardServer* server_ = nullptr;
   std::mutex writer_mutex_;  ///< before mutex_ where both are held
   bus::Writer<msg::TargetRequest>* writer_ = nullptr;  ///< SetWriter
+  std::string refusal_ = "no DDS writer of target requests yet";  ///< SetWriter, while writer_ is null
   const DashboardOptions& options_;
   std::mutex mutex_;
   std::map<std::string, Pending> pending_;
@@ -311,7 +309,9 @@ cli::ExitCode RunDashboardCommand(const DashboardOptions& o) {
       } catch (const std::exception& e) {
         fmt::print(stderr, "dpc dashboard: read-only, the page cannot set the target: {}\n", e.what());
       }
-      requests.SetWriter(request_writer.get());
+      requests.SetWriter(request_writer.get(),
+                         "this dashboard may not publish target requests (its DDS identity has no such permission: "
+                         "give --identity operator)");
       replies = participant->MakeReader<msg::TargetReply>(bench, [&](const msg::TargetReply& r, const fdds::SampleInfo&) {
         requests.OnReply(r.request_id().to_string(), r.accepted(), r.message().to_string(), r.revision());
       });
@@ -349,7 +349,9 @@ cli::ExitCode RunDashboardCommand(const DashboardOptions& o) {
           });
     };
     const auto delete_endpoints = [&] {
-      requests.SetWriter(nullptr);
+      requests.SetWriter(nullptr,
+                         "this dashboard is making its DDS participant again (a security handshake had stalled): "
+                         "send the target again in a second");
       statuses.reset();
       summaries.reset();
       devices.reset();
