@@ -209,7 +209,7 @@ authenticated_by_driver() { grep -q "participant authenticated: .*($1)" "$WORK/d
 if [[ $CASE == secure_peers ]]; then
   # Fast DDS 2.9: the handshake of two participants can stall for good (both discovered, neither
   # ever authenticated; see ARCHITECTURE.md). The starved controller makes its participant again
-  # by itself after about 10 s (bus::HandshakeWatchdog); should that not be enough, a restart is
+  # by itself after about 4 s (bus::HandshakeWatchdog); should that not be enough, a restart is
   # done once here, at 15 s, and said; a second stall fails.
   if ! wait_for_quietly 15 grep -q "device: 3 stages" "$WORK/controller.log" &&
      ! authenticated_by_driver dpc-controller/remote; then
@@ -247,7 +247,7 @@ run_polarimeter
 if [[ $CASE == secure_peers ]] &&
    ! wait_for_quietly 15 authenticated_by_driver dpc-polarimeter/bench1; then
   # The same stall between the polarimeter and the driver: the driver would never see a sample
-  # (the polarimeter's own heal comes after 10 s, later than this 6-s run ends).
+  # (the polarimeter's own heal comes after 4 s, too late for most of this 6-s run).
   echo "note: the driver's security handshake with the polarimeter did not finish in 15 s (a Fast DDS 2.9 stall); restarting the polarimeter once"
   kill -TERM "$POL_PID" 2>/dev/null || true
   wait "$POL_PID" || true

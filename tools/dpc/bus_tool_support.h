@@ -30,7 +30,7 @@ struct BusToolOptions {
 
 /// A long-running command's participant (record, monitor, dashboard, topic echo/hz). With DDS
 /// Security it heals a stalled handshake by itself, as the services do: when a peer's handshake
-/// has had no outcome for 10 s (so nothing of that peer's reaches the command), a line on stderr
+/// has had no outcome for 4 s (so nothing of that peer's reaches the command), a line on stderr
 /// names the peer, and the participant and the command's endpoints are made again
 /// (bus::ParticipantMaker, bus::HandshakeWatchdog as an observer). While some handshake stays
 /// pending (a peer that never answers), the next such reload comes after 30 s, then twice as late

@@ -127,11 +127,19 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
         // Its handshake begins (unless its outcome came first: another thread of Fast DDS's).
         if (secure_ && settled_.count(prefix) == 0 && pending_.size() < kMaxNames) {
           pending_.emplace(prefix, MonotonicNs());
+          if (dropped_.erase(prefix) != 0) returning_.insert(prefix);
         }
       } else {
         names_.erase(prefix);
         refused_.erase(prefix);
         pending_.erase(prefix);
+        returning_.erase(prefix);
+        // Its lease expired (it left without saying so): if it comes back with the same GUID, it
+        // may still hold the handshake it had with this participant (HandshakeWatchdog).
+        if (secure_ && info.status == Status::DROPPED_PARTICIPANT && authenticated_.count(prefix) != 0 &&
+            dropped_.size() < kMaxNames) {
+          dropped_.insert(prefix);
+        }
         settled_.erase(prefix);
         authenticated_.erase(prefix);
         kind = PeerEvent::Kind::kGone;
@@ -149,6 +157,7 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
       std::lock_guard<std::mutex> lock(mutex_);
       if (auto found = names_.find(prefix); found != names_.end()) name = found->second;
       pending_.erase(prefix);
+      returning_.erase(prefix);
       if (settled_.size() < kMaxNames) settled_.insert(prefix);
       if (refused) {
         authenticated_.erase(prefix);
@@ -192,12 +201,13 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
     for (const auto& prefix : authenticated_) peers.push_back(SourceName(SourceOf(prefix)));
     return peers;
   }
-  std::vector<std::string> PendingHandshakes(int64_t older_than_ns) const {
+  std::vector<std::string> PendingHandshakes(int64_t older_than_ns, bool returning_only) const {
     const int64_t now_ns = MonotonicNs();
     std::vector<std::string> peers;
     std::lock_guard<std::mutex> lock(mutex_);
     for (const auto& [prefix, since_ns] : pending_) {
       if (now_ns - since_ns < older_than_ns) continue;
+      if (returning_only && returning_.count(prefix) == 0) continue;
       const auto name = names_.find(prefix);
       peers.push_back(Who(SourceName(SourceOf(prefix)), name == names_.end() ? std::string() : name->second));
     }
@@ -218,6 +228,10 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
   std::set<eprosima::fastrtps::rtps::GuidPrefix_t> settled_;
   /// Secure only: those authenticated (a subset of settled_).
   std::set<eprosima::fastrtps::rtps::GuidPrefix_t> authenticated_;
+  /// Secure only: authenticated participants whose lease expired (until they come back), and
+  /// those that came back and are pending (a subset of pending_). Bounded by kMaxNames.
+  std::set<eprosima::fastrtps::rtps::GuidPrefix_t> dropped_;
+  std::set<eprosima::fastrtps::rtps::GuidPrefix_t> returning_;
 };
 
 std::string PrintableName(const std::string& name) {
@@ -322,8 +336,8 @@ std::vector<std::string> BusParticipant::AuthenticatedPeers() const { return dis
 
 std::string BusParticipant::guid_prefix() const { return SourceName(SourceOf(participant_->guid().guidPrefix)); }
 
-std::vector<std::string> BusParticipant::PendingHandshakes(int64_t older_than_ns) const {
-  return discovery_->PendingHandshakes(older_than_ns);
+std::vector<std::string> BusParticipant::PendingHandshakes(int64_t older_than_ns, bool returning_only) const {
+  return discovery_->PendingHandshakes(older_than_ns, returning_only);
 }
 
 std::string BusParticipant::WriterPartition(const eprosima::fastrtps::rtps::GUID_t& writer) const {

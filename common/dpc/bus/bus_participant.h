@@ -427,9 +427,11 @@ class BusParticipant {
 
   /// With DDS Security: the remote participants discovered at least `older_than_ns` ago (steady
   /// clock) whose handshake has had no outcome since (neither authenticated nor refused, nor
-  /// gone), as "GUID prefix (name)". Empty on an open participant. (Fast DDS 2.9's handshake
-  /// can stall for good: HandshakeWatchdog.)
-  std::vector<std::string> PendingHandshakes(int64_t older_than_ns) const;
+  /// gone), as "GUID prefix (name)"; with kReturningOnly, only those discovered again after
+  /// their lease had expired. Empty on an open participant. (Fast DDS 2.9's handshake can stall
+  /// for good: HandshakeWatchdog.)
+  static constexpr bool kReturningOnly = true;
+  std::vector<std::string> PendingHandshakes(int64_t older_than_ns, bool returning_only = false) const;
 
   /// With DDS Security: the remote participants authenticated (and not gone since), as GUID
   /// prefixes written as SourceName writes them. Empty on an open participant.

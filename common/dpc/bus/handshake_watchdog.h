@@ -15,6 +15,16 @@
 // kStallNs again). Pure policy (no clock, no DDS): the service gives it the times and the
 // stalled peers (ParticipantMaker::HandshakeStalled).
 //
+// A peer whose lease had expired (it was stopped, or cut off, for longer than its lease) and
+// that comes back with the same GUID is another matter: it still holds the handshake it finished
+// before, and Fast DDS 2.9 does not handshake it again, so its new handshake stays pending and it
+// never hears from this participant again, while its own side sees nothing wrong (seen with a
+// controller stopped for 5 s: the polarimeter it came back to never sent it a sample). Only a
+// new participant here, a stranger to it, is handshaken afresh; so a returning peer pending for
+// kStallNs makes a reload even when this service works (JudgeReturning). The new participant
+// never saw the peer leave, so each returning peer costs at most one reload, and at most one such
+// reload comes per kFirstBackoffNs.
+//
 // An observer (a `dpc` command: record, monitor, dashboard, topic) has no progress of its own to
 // weigh: a stalled peer is one it hears nothing from, and its reload costs only its own view for
 // about a second. Its `progress_ns` is when it last had no handshake pending (ObserverParticipant
@@ -36,7 +46,10 @@ class HandshakeWatchdog {
 
   explicit HandshakeWatchdog(Starving starving = Starving::kService) : starving_(starving) {}
 
-  static constexpr int64_t kStallNs = 10'000'000'000;         ///< a pending handshake, and no progress
+  /// A pending handshake, and no progress, for this long. A handshake that works ends in 15-60 ms
+  /// on loopback, about 1 s when Fast DDS resends its first message (a participant that was just
+  /// made); one that stalled never ends.
+  static constexpr int64_t kStallNs = 4'000'000'000;
   static constexpr int64_t kCheckPeriodNs = 1'000'000'000;    ///< Due() at most this often
   static constexpr int64_t kFirstBackoffNs = 30'000'000'000;  ///< after a reload, the next one at the earliest
   static constexpr int64_t kMaxBackoffNs = 600'000'000'000;
@@ -60,9 +73,7 @@ class HandshakeWatchdog {
       return {};
     }
     if (stalled.empty() || now_ns < not_before_ns_) return {};
-    std::string peers;
-    for (size_t i = 0; i < stalled.size() && i < kMaxNamed; ++i) peers += (i == 0 ? "" : ", ") + stalled[i];
-    if (stalled.size() > kMaxNamed) peers += " and " + std::to_string(stalled.size() - kMaxNamed) + " more";
+    const std::string peers = Named(stalled);
     ++reloads_;
     not_before_ns_ = now_ns + backoff_ns_;
     const std::string starved =
@@ -79,15 +90,35 @@ class HandshakeWatchdog {
     return why;
   }
 
-  /// How many reloads Judge asked for.
+  /// `returning`: the peers that came back after their lease expired and whose handshakes have
+  /// been pending for kStallNs or longer (BusParticipant::PendingHandshakes). Why the service
+  /// should make its participant again now, whether or not it works, or empty.
+  std::string JudgeReturning(int64_t now_ns, const std::vector<std::string>& returning) {
+    if (returning.empty() || now_ns < returning_not_before_ns_) return {};
+    ++reloads_;
+    returning_not_before_ns_ = now_ns + kFirstBackoffNs;
+    return "the security handshake with " + Named(returning) + ", back after its lease had expired, has had no " +
+           "outcome for " + std::to_string(kStallNs / 1'000'000'000) +
+           " s or more (Fast DDS 2.9 does not handshake a returning participant again: it would never hear from "
+           "this one): a new participant, handshaken afresh";
+  }
+
+  /// How many reloads Judge and JudgeReturning asked for.
   uint64_t reloads() const { return reloads_; }
 
  private:
   static constexpr size_t kMaxNamed = 3;
+  static std::string Named(const std::vector<std::string>& peers) {
+    std::string named;
+    for (size_t i = 0; i < peers.size() && i < kMaxNamed; ++i) named += (i == 0 ? "" : ", ") + peers[i];
+    if (peers.size() > kMaxNamed) named += " and " + std::to_string(peers.size() - kMaxNamed) + " more";
+    return named;
+  }
   Starving starving_;
   int64_t next_check_ns_ = 0;
   int64_t not_before_ns_ = 0;
   int64_t backoff_ns_ = kFirstBackoffNs;
+  int64_t returning_not_before_ns_ = 0;  ///< JudgeReturning
   uint64_t reloads_ = 0;
 };
 

@@ -9,8 +9,10 @@
 // are refused and the service keeps running on the participant it has. With DDS Security the
 // service then keeps running on the old participant while the new one discovers and
 // authenticates the peers (about 1 s on loopback): the endpoints move only once the new
-// participant has authenticated every peer the old one had (PeersNotYetAuthenticated), or after
-// kMaxPrepareNs. Moving them: the service's endpoints deleted (readers first: their callbacks
+// participant has authenticated every peer the old one had (PeersNotYetAuthenticated). A new
+// participant that has not done so within kMaxPrepareNs has most likely met a stalled handshake
+// itself (Fast DDS 2.9, below): it is replaced by another, up to kMaxPrepareAttempts in all, and
+// the endpoints move to the last one whatever it has authenticated. Moving them: the service's endpoints deleted (readers first: their callbacks
 // end before anything they use goes), the old participant replaced, and the endpoints made again
 // on the new one, whose handshakes are done: only the endpoints' own discovery remains.
 //
@@ -64,7 +66,8 @@ class ParticipantMaker {
   /// At start: throws as BusParticipant does (the service cannot start).
   std::unique_ptr<BusParticipant> Make() const { return std::make_unique<BusParticipant>(options_, on_peer_); }
 
-  static constexpr int64_t kMaxPrepareNs = 3'000'000'000;  ///< the endpoints move then at the latest
+  static constexpr int64_t kMaxPrepareNs = 3'000'000'000;  ///< for one new participant to authenticate the peers
+  static constexpr int kMaxPrepareAttempts = 3;              ///< new participants per reload, at most
   static constexpr int64_t kPrepareCheckNs = 5'000'000;     ///< looks at the handshakes at most this often
 
   /// A reload, from the service's loop, on the thread that owns `*participant` (no reader's
@@ -72,9 +75,10 @@ class ParticipantMaker {
   /// `cause` (what the log lines say, "reload (SIGHUP): …") asks for one now: a new participant;
   /// if it cannot be made, the error is logged and nothing changes. An empty `cause` goes on
   /// with the reload being prepared (call it so while preparing()). Open, the endpoints move at
-  /// once; with DDS Security once the new participant has authenticated the old one's peers, or
-  /// after kMaxPrepareNs: `delete_endpoints`, the old participant replaced by the new one,
-  /// `make_endpoints` (on it). True when the endpoints moved.
+  /// once; with DDS Security once the new participant has authenticated the old one's peers (a
+  /// new participant that has not after kMaxPrepareNs is replaced by another, and the endpoints
+  /// move to the kMaxPrepareAttempts-th in any case): `delete_endpoints`, the old participant
+  /// replaced by the new one, `make_endpoints` (on it). True when the endpoints moved.
   bool Reload(std::unique_ptr<BusParticipant>* participant, const std::function<void()>& delete_endpoints,
               const std::function<void()>& make_endpoints, const std::string& cause) {
     const int64_t now_ns = MonotonicNs();
@@ -92,6 +96,8 @@ class ParticipantMaker {
       }
       cause_ = cause;
       prepared_since_ns_ = now_ns;
+      reload_since_ns_ = now_ns;
+      attempt_ = 1;
       next_check_ns_ = 0;
       log_(false, "reload (" + cause + "): a new participant (" + credentials + "); " +
                       (fresh_->secure() ? "the endpoints move to it once it has authenticated the peers of the "
@@ -109,12 +115,35 @@ class ParticipantMaker {
       const size_t missing = PeersNotYetAuthenticated((*participant)->AuthenticatedPeers(),
                                                       fresh_->AuthenticatedPeers(), fresh_->guid_prefix(), &peers,
                                                       &not_yet);
-      const int64_t waited_ns = now_ns - prepared_since_ns_;
-      if (missing > 0 && waited_ns < kMaxPrepareNs) return false;
-      how = " (after " + std::to_string(waited_ns / 1'000'000) + " ms: it authenticated " +
-            std::to_string(peers - missing) + " of the " + std::to_string(peers) + " peers of the old one";
-      for (size_t i = 0; i < not_yet.size() && i < 3; ++i) how += (i == 0 ? "; not yet " : ", ") + not_yet[i];
-      how += ")";
+      if (missing > 0 && now_ns - prepared_since_ns_ < kMaxPrepareNs) return false;
+      std::string authenticated = "it authenticated " + std::to_string(peers - missing) + " of the " +
+                                  std::to_string(peers) + " peers of the old one";
+      for (size_t i = 0; i < not_yet.size() && i < 3; ++i) {
+        authenticated += (i == 0 ? "; not yet " : ", ") + not_yet[i];
+      }
+      if (not_yet.size() > 3) authenticated += " and " + std::to_string(not_yet.size() - 3) + " more";
+      if (missing > 0 && attempt_ < kMaxPrepareAttempts) {
+        // Its handshakes with those peers have most likely stalled: another new participant,
+        // while the old one goes on serving.
+        try {
+          fresh_ = Make();
+        } catch (const std::exception& e) {
+          log_(true, "reload (" + cause_ + "): another new participant could not be made (" + e.what() +
+                         "): the endpoints move to the one there is");
+          attempt_ = kMaxPrepareAttempts;
+          return false;
+        }
+        ++attempt_;
+        prepared_since_ns_ = now_ns;
+        log_(false, "reload (" + cause_ + "): the new participant did not authenticate the old one's peers in " +
+                        std::to_string(kMaxPrepareNs / 1'000'000'000) + " s (" + authenticated +
+                        "): another new participant (" + std::to_string(attempt_) + " of at most " +
+                        std::to_string(kMaxPrepareAttempts) + ")");
+        return false;
+      }
+      how = " (after " + std::to_string((now_ns - reload_since_ns_) / 1'000'000) + " ms" +
+            (attempt_ > 1 ? " and " + std::to_string(attempt_) + " new participants" : std::string()) + ": " +
+            authenticated + ")";
     }
     delete_endpoints();
     *participant = std::move(fresh_);  // the old participant goes
@@ -140,12 +169,15 @@ class ParticipantMaker {
   /// As often as convenient (it looks at most once a second; cheap otherwise): with DDS
   /// Security, whether a peer's handshake has had no outcome for HandshakeWatchdog::kStallNs
   /// while the service made no progress since `progress_ns` (monotonic, like `now_ns`) for as
-  /// long. If so, a line in the log says so, and the service should Reload(…, "handshake stall")
+  /// long, or a peer back after its lease expired has had none for as long (JudgeReturning). If so, a line in the log says so, and the service should Reload(…, "handshake stall")
   /// now (HandshakeWatchdog's back-off is running).
   bool HandshakeStalled(const BusParticipant& participant, int64_t now_ns, int64_t progress_ns) {
     if (!participant.secure() || preparing() || !watchdog_.Due(now_ns)) return false;
-    const std::string why =
-        watchdog_.Judge(now_ns, progress_ns, participant.PendingHandshakes(HandshakeWatchdog::kStallNs));
+    std::string why = watchdog_.JudgeReturning(
+        now_ns, participant.PendingHandshakes(HandshakeWatchdog::kStallNs, BusParticipant::kReturningOnly));
+    if (why.empty()) {
+      why = watchdog_.Judge(now_ns, progress_ns, participant.PendingHandshakes(HandshakeWatchdog::kStallNs));
+    }
     if (why.empty()) return false;
     log_(true, why);
     return true;
@@ -158,7 +190,9 @@ class ParticipantMaker {
   HandshakeWatchdog watchdog_;
   std::unique_ptr<BusParticipant> fresh_;  ///< a reload being prepared
   std::string cause_;
-  int64_t prepared_since_ns_ = 0;
+  int64_t prepared_since_ns_ = 0;  ///< when fresh_ was made
+  int64_t reload_since_ns_ = 0;    ///< when the reload was asked for
+  int attempt_ = 0;                ///< fresh_ is the reload's attempt_-th new participant
   int64_t next_check_ns_ = 0;
 };
 

@@ -1,6 +1,6 @@
 // HandshakeWatchdog: when a secured service makes its participant again by itself (a handshake
-// with no outcome, and no progress, both for 10 s), and how often at most; and what an observer
-// (a `dpc` command) is told.
+// with no outcome, and no progress, both for kStallNs; or a peer back after its lease expired),
+// and how often at most; and what an observer (a `dpc` command) is told.
 #include "dpc/bus/handshake_watchdog.h"
 
 #include <gtest/gtest.h>
@@ -12,6 +12,7 @@ namespace dpc::bus {
 namespace {
 
 constexpr int64_t kS = 1'000'000'000;
+constexpr int64_t kStall = HandshakeWatchdog::kStallNs;
 const std::vector<std::string> kNone;
 const std::vector<std::string> kGhost = {"01.0f.aa (dpc-test-ghost)"};
 
@@ -26,8 +27,8 @@ TEST(HandshakeWatchdogTest, LooksAtMostOnceASecond) {
 TEST(HandshakeWatchdogTest, AsksForAReloadOnlyWhenAHandshakeStalledAndTheServiceStarves) {
   HandshakeWatchdog watchdog;
   const int64_t start = 1000 * kS;
-  // A working service (progress 9.9 s ago) with a stalled peer: nothing.
-  EXPECT_EQ(watchdog.Judge(start, start - 9'900'000'000, kGhost), "");
+  // A working service (progress just under kStallNs ago) with a stalled peer: nothing.
+  EXPECT_EQ(watchdog.Judge(start, start - kStall + kS / 10, kGhost), "");
   // A starved service with no stalled peer (nobody there, or every handshake finished): nothing.
   EXPECT_EQ(watchdog.Judge(start, start - 60 * kS, kNone), "");
   // Both: a reload, named and explained.
@@ -49,10 +50,11 @@ TEST(HandshakeWatchdogTest, AStarvedServiceReloadsLessAndLessOftenUntilItWorksAg
   EXPECT_EQ(reloads_s, (std::vector<int64_t>{10, 40, 100, 220, 460, 940, 1540}));
   // It works again: a new stall heals as soon as the first did, then 30 s later.
   EXPECT_EQ(watchdog.Judge(2001 * kS, 2000 * kS, kGhost), "");
-  EXPECT_EQ(watchdog.Judge(2010 * kS, 2001 * kS, kGhost), "");  // starved for 9 s only
-  EXPECT_NE(watchdog.Judge(2011 * kS, 2001 * kS, kGhost), "");
-  EXPECT_EQ(watchdog.Judge(2040 * kS, 2001 * kS, kGhost), "");
-  EXPECT_NE(watchdog.Judge(2041 * kS, 2001 * kS, kGhost), "");
+  const int64_t healed = 2001 * kS + kStall;
+  EXPECT_EQ(watchdog.Judge(healed - kS, 2001 * kS, kGhost), "");  // not starved for kStallNs yet
+  EXPECT_NE(watchdog.Judge(healed, 2001 * kS, kGhost), "");
+  EXPECT_EQ(watchdog.Judge(healed + 29 * kS, 2001 * kS, kGhost), "");
+  EXPECT_NE(watchdog.Judge(healed + 30 * kS, 2001 * kS, kGhost), "");
 }
 
 TEST(HandshakeWatchdogTest, NamesAtMostThreePeersAndCountsTheRest) {
@@ -64,17 +66,38 @@ TEST(HandshakeWatchdogTest, NamesAtMostThreePeersAndCountsTheRest) {
 
 TEST(HandshakeWatchdogTest, AnObserverIsToldThatItHearsNothingFromTheStalledPeer) {
   HandshakeWatchdog watchdog(HandshakeWatchdog::Starving::kObserver);
-  // Its progress: when it last had no handshake pending (here: 11 s ago).
-  EXPECT_EQ(watchdog.Judge(100 * kS, 91 * kS, kGhost), "");
-  const std::string why = watchdog.Judge(100 * kS, 89 * kS, kGhost);
-  EXPECT_NE(why.find("01.0f.aa (dpc-test-ghost) has had no outcome for 10 s or more, so nothing of theirs reaches "
+  // Its progress: when it last had no handshake pending.
+  EXPECT_EQ(watchdog.Judge(100 * kS, 100 * kS - kStall + kS, kGhost), "");
+  const std::string why = watchdog.Judge(100 * kS, 100 * kS - kStall - kS, kGhost);
+  EXPECT_NE(why.find("01.0f.aa (dpc-test-ghost) has had no outcome for " + std::to_string(kStall / kS) +
+                     " s or more, so nothing of theirs reaches "
                      "this command (a Fast DDS 2.9 handshake stall"),
             std::string::npos)
       << why;
   EXPECT_EQ(why.find("this service"), std::string::npos) << why;
   // Every handshake settled since: the back-off starts over.
   EXPECT_EQ(watchdog.Judge(105 * kS, 104 * kS, kNone), "");
-  EXPECT_NE(watchdog.Judge(116 * kS, 104 * kS, kGhost), "");
+  EXPECT_NE(watchdog.Judge(104 * kS + kStall, 104 * kS, kGhost), "");
+}
+
+TEST(HandshakeWatchdogTest, APeerBackAfterItsLeaseExpiredAndPendingMakesAWorkingServiceReloadOnce) {
+  HandshakeWatchdog watchdog;
+  const int64_t now = 1000 * kS;
+  EXPECT_EQ(watchdog.JudgeReturning(now, kNone), "");
+  // Whatever the service's progress (Judge is not asked): a reload, named and explained.
+  const std::string why = watchdog.JudgeReturning(now, kGhost);
+  EXPECT_NE(why.find("the security handshake with 01.0f.aa (dpc-test-ghost), back after its lease had expired, has "
+                     "had no outcome for " +
+                     std::to_string(kStall / kS) + " s or more"),
+            std::string::npos)
+      << why;
+  EXPECT_EQ(watchdog.reloads(), 1u);
+  // The next one not before 30 s (the new participant never saw the peer leave, so it would not
+  // list it as returning anyway).
+  EXPECT_EQ(watchdog.JudgeReturning(now + 29 * kS, kGhost), "");
+  EXPECT_NE(watchdog.JudgeReturning(now + 30 * kS, kGhost), "");
+  // It does not hold back the other judgement: a starved service with a stalled peer still heals.
+  EXPECT_NE(watchdog.Judge(now + 31 * kS, 0, kGhost), "");
 }
 
 }  // namespace
