@@ -625,7 +625,8 @@ TEST_F(BenchSecurityTest, ADpcCommandHealsAStalledHandshakeAndKeepsRecording) {
       << "dpc record did not heal\n" << record.Log();
   const double after_s = (MonotonicNs() - start_ns) * 1e-9;
   std::printf("dpc record made its participant again %.1f s after it started\n", after_s);
-  EXPECT_GE(after_s, bus::HandshakeWatchdog::kStallNs * 1e-9 - 1) << "too early: the ghost was not pending for kStallNs";
+  EXPECT_GE(after_s, bus::HandshakeWatchdog::kStallNs * 1e-9 - 1)
+      << "too early: the ghost was not pending for kStallNs";
   ASSERT_EQ(record.Wait(20s), 0) << record.Log();
   const std::string log = record.Log();
   const size_t warning = log.find(kStallWarning);

@@ -12,9 +12,10 @@
 // participant has authenticated every peer the old one had (PeersNotYetAuthenticated). A new
 // participant that has not done so within kMaxPrepareNs has most likely met a stalled handshake
 // itself (Fast DDS 2.9, below): it is replaced by another, up to kMaxPrepareAttempts in all, and
-// the endpoints move to the last one whatever it has authenticated. Moving them: the service's endpoints deleted (readers first: their callbacks
-// end before anything they use goes), the old participant replaced, and the endpoints made again
-// on the new one, whose handshakes are done: only the endpoints' own discovery remains.
+// the endpoints move to the last one whatever it has authenticated. Moving them: the service's
+// endpoints deleted (readers first: their callbacks end before anything they use goes), the old
+// participant replaced, and the endpoints made again on the new one, whose handshakes are done:
+// only the endpoints' own discovery remains.
 //
 // A secured service also reloads by itself when a peer's handshake has stalled and the service
 // starves for it (HandshakeStalled, HandshakeWatchdog).
@@ -169,8 +170,9 @@ class ParticipantMaker {
   /// As often as convenient (it looks at most once a second; cheap otherwise): with DDS
   /// Security, whether a peer's handshake has had no outcome for HandshakeWatchdog::kStallNs
   /// while the service made no progress since `progress_ns` (monotonic, like `now_ns`) for as
-  /// long, or a peer back after its lease expired has had none for as long (JudgeReturning). If so, a line in the log says so, and the service should Reload(…, "handshake stall")
-  /// now (HandshakeWatchdog's back-off is running).
+  /// long, or a peer back after its lease expired has had none for as long (JudgeReturning). If
+  /// so, a line in the log says so, and the service should Reload(…, "handshake stall") now
+  /// (HandshakeWatchdog's back-off is running).
   bool HandshakeStalled(const BusParticipant& participant, int64_t now_ns, int64_t progress_ns) {
     if (!participant.secure() || preparing() || !watchdog_.Due(now_ns)) return false;
     std::string why = watchdog_.JudgeReturning(
