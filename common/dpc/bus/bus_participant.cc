@@ -126,14 +126,12 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
         if (info.status == Status::CHANGED_QOS_PARTICIPANT) return;
         // Its handshake begins (unless its outcome came first: another thread of Fast DDS's).
         if (secure_ && settled_.count(prefix) == 0 && pending_.size() < kMaxNames) {
-          pending_.emplace(prefix, MonotonicNs());
-          if (dropped_.erase(prefix) != 0) returning_.insert(prefix);
+          pending_.emplace(prefix, Pending{MonotonicNs(), dropped_.erase(prefix) != 0});
         }
       } else {
         names_.erase(prefix);
         refused_.erase(prefix);
         pending_.erase(prefix);
-        returning_.erase(prefix);
         // Its lease expired (it left without saying so): if it comes back with the same GUID, it
         // may still hold the handshake it had with this participant (HandshakeWatchdog).
         if (secure_ && info.status == Status::DROPPED_PARTICIPANT && authenticated_.count(prefix) != 0 &&
@@ -157,7 +155,6 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
       std::lock_guard<std::mutex> lock(mutex_);
       if (auto found = names_.find(prefix); found != names_.end()) name = found->second;
       pending_.erase(prefix);
-      returning_.erase(prefix);
       if (settled_.size() < kMaxNames) settled_.insert(prefix);
       if (refused) {
         authenticated_.erase(prefix);
@@ -205,9 +202,8 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
     const int64_t now_ns = MonotonicNs();
     std::vector<std::string> peers;
     std::lock_guard<std::mutex> lock(mutex_);
-    for (const auto& [prefix, since_ns] : pending_) {
-      if (now_ns - since_ns < older_than_ns) continue;
-      if (returning_only && returning_.count(prefix) == 0) continue;
+    for (const auto& [prefix, pending] : pending_) {
+      if (now_ns - pending.since_ns < older_than_ns || (returning_only && !pending.returning)) continue;
       const auto name = names_.find(prefix);
       peers.push_back(Who(SourceName(SourceOf(prefix)), name == names_.end() ? std::string() : name->second));
     }
@@ -224,14 +220,17 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
   /// Secure only: discovered participants whose handshake has no outcome yet, since when
   /// (MonotonicNs); and those whose handshake had one (authenticated or refused). Both
   /// bounded by kMaxNames; a participant gone leaves both.
-  std::map<eprosima::fastrtps::rtps::GuidPrefix_t, int64_t> pending_;
+  struct Pending {
+    int64_t since_ns;  ///< MonotonicNs
+    bool returning;    ///< discovered again after its lease expired (dropped_)
+  };
+  std::map<eprosima::fastrtps::rtps::GuidPrefix_t, Pending> pending_;
   std::set<eprosima::fastrtps::rtps::GuidPrefix_t> settled_;
   /// Secure only: those authenticated (a subset of settled_).
   std::set<eprosima::fastrtps::rtps::GuidPrefix_t> authenticated_;
-  /// Secure only: authenticated participants whose lease expired (until they come back), and
-  /// those that came back and are pending (a subset of pending_). Bounded by kMaxNames.
+  /// Secure only: authenticated participants whose lease expired, until they come back.
+  /// Bounded by kMaxNames.
   std::set<eprosima::fastrtps::rtps::GuidPrefix_t> dropped_;
-  std::set<eprosima::fastrtps::rtps::GuidPrefix_t> returning_;
 };
 
 std::string PrintableName(const std::string& name) {

@@ -38,6 +38,15 @@
 
 namespace dpc::bus {
 
+/// Peers for a log line: the first three, then how many more ("a, b, c and 2 more").
+inline std::string NamedPeers(const std::vector<std::string>& peers) {
+  constexpr size_t kMaxNamed = 3;
+  std::string named;
+  for (size_t i = 0; i < peers.size() && i < kMaxNamed; ++i) named += (i == 0 ? "" : ", ") + peers[i];
+  if (peers.size() > kMaxNamed) named += " and " + std::to_string(peers.size() - kMaxNamed) + " more";
+  return named;
+}
+
 class HandshakeWatchdog {
  public:
   /// Who starves, for the log line: a service (no progress of its own), or an observer (it
@@ -73,7 +82,7 @@ class HandshakeWatchdog {
       return {};
     }
     if (stalled.empty() || now_ns < not_before_ns_) return {};
-    const std::string peers = Named(stalled);
+    const std::string peers = NamedPeers(stalled);
     ++reloads_;
     not_before_ns_ = now_ns + backoff_ns_;
     const std::string starved =
@@ -97,7 +106,7 @@ class HandshakeWatchdog {
     if (returning.empty() || now_ns < returning_not_before_ns_) return {};
     ++reloads_;
     returning_not_before_ns_ = now_ns + kFirstBackoffNs;
-    return "the security handshake with " + Named(returning) + ", back after its lease had expired, has had no " +
+    return "the security handshake with " + NamedPeers(returning) + ", back after its lease had expired, has had no " +
            "outcome for " + std::to_string(kStallNs / 1'000'000'000) +
            " s or more (Fast DDS 2.9 does not handshake a returning participant again: it would never hear from "
            "this one): a new participant, handshaken afresh";
@@ -107,13 +116,6 @@ class HandshakeWatchdog {
   uint64_t reloads() const { return reloads_; }
 
  private:
-  static constexpr size_t kMaxNamed = 3;
-  static std::string Named(const std::vector<std::string>& peers) {
-    std::string named;
-    for (size_t i = 0; i < peers.size() && i < kMaxNamed; ++i) named += (i == 0 ? "" : ", ") + peers[i];
-    if (peers.size() > kMaxNamed) named += " and " + std::to_string(peers.size() - kMaxNamed) + " more";
-    return named;
-  }
   Starving starving_;
   int64_t next_check_ns_ = 0;
   int64_t not_before_ns_ = 0;

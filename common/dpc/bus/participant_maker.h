@@ -119,10 +119,7 @@ class ParticipantMaker {
       if (missing > 0 && now_ns - prepared_since_ns_ < kMaxPrepareNs) return false;
       std::string authenticated = "it authenticated " + std::to_string(peers - missing) + " of the " +
                                   std::to_string(peers) + " peers of the old one";
-      for (size_t i = 0; i < not_yet.size() && i < 3; ++i) {
-        authenticated += (i == 0 ? "; not yet " : ", ") + not_yet[i];
-      }
-      if (not_yet.size() > 3) authenticated += " and " + std::to_string(not_yet.size() - 3) + " more";
+      if (!not_yet.empty()) authenticated += "; not yet " + NamedPeers(not_yet);
       if (missing > 0 && attempt_ < kMaxPrepareAttempts) {
         // Its handshakes with those peers have most likely stalled: another new participant,
         // while the old one goes on serving.
