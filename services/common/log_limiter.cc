@@ -37,6 +37,25 @@ bool LogLimiter::Log(spdlog::level::level_enum level, const std::string& key, co
   return true;
 }
 
+std::string LogLimiter::KeyOf(std::string_view message) {
+  const auto digit = [](char c) { return c >= '0' && c <= '9'; };
+  std::string key;
+  key.reserve(message.size());
+  for (size_t i = 0; i < message.size();) {
+    if (!digit(message[i])) {
+      key += message[i++];
+      continue;
+    }
+    key += '#';
+    while (i < message.size() &&
+           (digit(message[i]) ||
+            ((message[i] == '.' || message[i] == ',') && i + 1 < message.size() && digit(message[i + 1])))) {
+      ++i;
+    }
+  }
+  return key;
+}
+
 uint64_t LogLimiter::suppressed(const std::string& key) const {
   const auto found = entries_.find(key);
   return found == entries_.end() ? 0 : found->second.suppressed;

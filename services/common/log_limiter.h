@@ -11,6 +11,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <string_view>
 
 #include <spdlog/spdlog.h>
 
@@ -27,6 +28,11 @@ class LogLimiter {
   /// Logs `message` at `level` unless a line of `key` was logged less than the interval ago (then
   /// it is counted). Returns whether it logged.
   bool Log(spdlog::level::level_enum level, const std::string& key, const std::string& message);
+
+  /// A key for a message whose figures change from line to line: the message with each number
+  /// (a run of digits, with the points and commas between them) replaced by '#'. "holding: main
+  /// silent for 3.25 ms" and "… for 41.70 ms" share a key; "holding: no controller yet" does not.
+  static std::string KeyOf(std::string_view message);
 
   /// Lines of `key` counted but not logged since its last line.
   uint64_t suppressed(const std::string& key) const;

@@ -257,12 +257,14 @@ class DriverService final : public Service {
     state_writer_->Write(state_message_);
     if (state.mode == DriverMode::kActive) progress_ns_ = MonotonicNs();
     if (state.reason != last_reason_) {
-      // Keyed by what the driver does (holds, or obeys whom): a reason that only changes its
-      // figures is logged at most every few seconds, with the count it stands for.
+      // Keyed by the reason without its figures: every change of what the driver does and why
+      // (obeys whom; holds because nobody came yet, or because the obeyed controller went
+      // silent) is logged when it first happens, and a reason that only changes its figures
+      // (silent for 3.2 ms, 41.7 ms, …) at most every few seconds, with the count it stands for.
       last_reason_ = state.reason;
       const bool holding = state.mode == DriverMode::kHolding;
-      log_.Log(holding ? spdlog::level::warn : spdlog::level::info,
-               holding ? std::string("holding") : "obeying " + state.obeyed_controller_id, last_reason_);
+      log_.Log(holding ? spdlog::level::warn : spdlog::level::info, LogLimiter::KeyOf(last_reason_),
+               last_reason_);
     }
   }
 

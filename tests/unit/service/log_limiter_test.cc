@@ -65,6 +65,25 @@ TEST_F(LogLimiterTest, KeepsABoundedNumberOfKeys) {
   EXPECT_TRUE(limiter_.Log(spdlog::level::info, "key 0", "line"));
 }
 
+TEST_F(LogLimiterTest, AKeyOfAMessageIgnoresItsFiguresOnly) {
+  EXPECT_EQ(LogLimiter::KeyOf("holding: main silent for 3.25 ms, 12 samples behind"),
+            "holding: main silent for # ms, # samples behind");
+  EXPECT_EQ(LogLimiter::KeyOf("holding: main silent for 3.25 ms, 12 samples behind"),
+            LogLimiter::KeyOf("holding: main silent for 41.7 ms, 3 samples behind"));
+  EXPECT_NE(LogLimiter::KeyOf("holding: no controller yet"),
+            LogLimiter::KeyOf("holding: main silent for 3.25 ms, 12 samples behind"));
+  EXPECT_EQ(LogLimiter::KeyOf("1,000.5 and 2. end."), "# and #. end.");
+  EXPECT_EQ(LogLimiter::KeyOf(""), "");
+  // Two reasons of the same kind share a key; a new kind logs at once, within the interval.
+  EXPECT_TRUE(limiter_.Log(spdlog::level::warn, LogLimiter::KeyOf("holding: no controller yet"),
+                           "holding: no controller yet"));
+  now_ns_ += 1'000'000'000;
+  EXPECT_TRUE(limiter_.Log(spdlog::level::warn, LogLimiter::KeyOf("holding: main silent for 3.2 ms"),
+                           "holding: main silent for 3.2 ms"));
+  EXPECT_FALSE(limiter_.Log(spdlog::level::warn, LogLimiter::KeyOf("holding: main silent for 9.9 ms"),
+                            "holding: main silent for 9.9 ms"));
+}
+
 TEST_F(LogLimiterTest, PeerEventsAreLoggedUpToABudgetPerWindowThenCounted) {
   PeerLog log([this] { return now_ns_; });
   log(false, "participant discovered: a (dpc-driver/bench1)");
