@@ -21,11 +21,7 @@
 // never hears from this participant again, while its own side sees nothing wrong (seen with a
 // controller stopped for 5 s: the polarimeter it came back to never sent it a sample). Only a
 // new participant here, a stranger to it, is handshaken afresh; so a returning peer pending for
-// kReturningStallNs makes a reload even when this service works (JudgeReturning). That wait is
-// shorter than kStallNs: the bench is cut off from the peer meanwhile, and the handshake of a
-// returning peer that does work ends sooner than a just-made participant's (cut and restored
-// links between network namespaces: the bench obeyed its remote controller again 0.1–0.7 s after
-// the link came back, discovery included). The new participant
+// kStallNs makes a reload even when this service works (JudgeReturning). The new participant
 // never saw the peer leave, so each returning peer costs at most one reload, and at most one such
 // reload comes per kFirstBackoffNs.
 //
@@ -63,9 +59,6 @@ class HandshakeWatchdog {
   /// on loopback, about 1 s when Fast DDS resends its first message (a participant that was just
   /// made); one that stalled never ends.
   static constexpr int64_t kStallNs = 4'000'000'000;
-  /// A returning peer's handshake pending this long (JudgeReturning): twice the longest that
-  /// ended among those measured (1.04 s, a just-made participant's).
-  static constexpr int64_t kReturningStallNs = 2'000'000'000;
   static constexpr int64_t kCheckPeriodNs = 1'000'000'000;    ///< Due() at most this often
   static constexpr int64_t kFirstBackoffNs = 30'000'000'000;  ///< after a reload, the next one at the earliest
   static constexpr int64_t kMaxBackoffNs = 600'000'000'000;
@@ -107,14 +100,14 @@ class HandshakeWatchdog {
   }
 
   /// `returning`: the peers that came back after their lease expired and whose handshakes have
-  /// been pending for kReturningStallNs or longer (BusParticipant::PendingHandshakes). Why the service
+  /// been pending for kStallNs or longer (BusParticipant::PendingHandshakes). Why the service
   /// should make its participant again now, whether or not it works, or empty.
   std::string JudgeReturning(int64_t now_ns, const std::vector<std::string>& returning) {
     if (returning.empty() || now_ns < returning_not_before_ns_) return {};
     ++reloads_;
     returning_not_before_ns_ = now_ns + kFirstBackoffNs;
     return "the security handshake with " + NamedPeers(returning) + ", back after its lease had expired, has had no " +
-           "outcome for " + std::to_string(kReturningStallNs / 1'000'000'000) +
+           "outcome for " + std::to_string(kStallNs / 1'000'000'000) +
            " s or more (Fast DDS 2.9 does not handshake a returning participant again: it would never hear from "
            "this one): a new participant, handshaken afresh";
   }

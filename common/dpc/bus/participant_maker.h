@@ -173,7 +173,7 @@ class ParticipantMaker {
   bool HandshakeStalled(const BusParticipant& participant, int64_t now_ns, int64_t progress_ns) {
     if (!participant.secure() || preparing() || !watchdog_.Due(now_ns)) return false;
     std::string why = watchdog_.JudgeReturning(
-        now_ns, participant.PendingHandshakes(HandshakeWatchdog::kReturningStallNs, BusParticipant::kReturningOnly));
+        now_ns, participant.PendingHandshakes(HandshakeWatchdog::kStallNs, BusParticipant::kReturningOnly));
     if (why.empty()) {
       why = watchdog_.Judge(now_ns, progress_ns, participant.PendingHandshakes(HandshakeWatchdog::kStallNs));
     }
