@@ -302,7 +302,15 @@ def failover_and_hold(args, base, work):
         figures["hold_after_disconnect_s"] = time.monotonic() - disconnected
         expect("standby silent" in holding["reason"], f"the driver says why it holds: \"{holding['reason']}\"")
         time.sleep(max(0.0, args.disconnect_s - (time.monotonic() - disconnected)))
-        held = [m for _, m in bench.states.snapshot(disconnected) if m["mode"] == "DRIVER_HOLDING"]
+        # The hold the disconnect made: the last run of holding states. `docker network disconnect`
+        # takes seconds on a small machine, and a starved standby may make the driver hold, and obey
+        # it again, before the link is gone (seen once: two holds, 247 ms and 2.8 s of silence).
+        since = [m for _, m in bench.states.snapshot(disconnected)]
+        active = [i for i, m in enumerate(since) if m["mode"] != "DRIVER_HOLDING"]
+        held = since[active[-1] + 1:] if active else since
+        if active and any(m["mode"] == "DRIVER_HOLDING" for m in since[:active[-1]]):
+            log(f"note: the driver held and obeyed again ({len(active)} active states) before the hold "
+                "of the disconnect; that last hold is the one checked")
         expect(len(held) >= 5 and all(m["phi_applied"] == held[0]["phi_applied"] for m in held),
                f"{len(held)} holding heartbeats, all with the same φ (distinct: "
                f"{sorted({tuple(m['phi_applied']) for m in held})[:4]}; reasons "
