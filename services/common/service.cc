@@ -1,5 +1,6 @@
 #include "service.h"
 
+#include <algorithm>
 #include <csignal>
 
 namespace dpc::services {
@@ -24,6 +25,7 @@ void Service::stop() {
     std::lock_guard<std::mutex> lock(mutex_);
     if (stopped_.exchange(true)) return;
   }
+  if (guard_ != nullptr) guard_->Stopping();
   stop_requested_.notify_all();
   OnStop();
 }
@@ -31,6 +33,12 @@ void Service::stop() {
 bool Service::WaitForStopUntil(std::chrono::steady_clock::time_point deadline) {
   std::unique_lock<std::mutex> lock(mutex_);
   return stop_requested_.wait_until(lock, deadline, [this] { return stopped(); });
+}
+
+double GuardedTurnLimitS(double option_s, std::optional<double> longest_turn_s) {
+  if (option_s <= 0.0 || !longest_turn_s) return 0.0;
+  constexpr double kMarginS = 2.0;
+  return std::max(option_s, *longest_turn_s + kMarginS);
 }
 
 SignalWatcher::SignalWatcher() {

@@ -14,6 +14,9 @@
 //   SIGHUP                               RequestReload(): the service makes its DDS participant
 //                                        again from the credentials and profiles on disk (a
 //                                        rotation of DDS Security credentials without a restart)
+//   stuck (LoopGuard): its loop has not  kRuntimeError (1) at once, saying where it was stuck
+//   turned for --stuck-exit-s, or it has  (a supervisor restarts it)
+//   not ended 8 s after a stop
 //
 // SIGINT, SIGTERM and SIGHUP are blocked in every thread (before Fast DDS starts its own) and
 // taken by one watcher thread (sigwait), which calls stop() or RequestReload(): docker stops
@@ -26,6 +29,7 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <pthread.h>
 #include <stdexcept>
 #include <string>
@@ -37,6 +41,7 @@
 #include "dpc/cli/command_line.h"
 #include "dpc/cli/exit_code.h"
 #include "dpc/config/scenario_error.h"
+#include "loop_guard.h"
 #include "service_runtime.h"
 
 namespace dpc::services {
@@ -56,6 +61,14 @@ class Service {
 
   /// Works until stop() or the end of the work; returns the exit code.
   virtual cli::ExitCode run() = 0;
+
+  /// The longest one turn of run()'s loop may take by the service's own bounded waits (a status
+  /// period, an instrument's connection timeout), in seconds; the loop guard's limit is never
+  /// below it plus a margin. nullopt (the default): run() has no loop that calls Turned(), and
+  /// only the stop grace is guarded.
+  virtual std::optional<double> LongestTurnS() const { return std::nullopt; }
+  /// Before run(): the guard that Turned(), GuardPhase() and stop() report to (ServiceMain's).
+  void AttachGuard(LoopGuard* guard) { guard_ = guard; }
 
   /// Thread-safe; wakes run() (and whatever OnStop wakes) at once. Idempotent.
   void stop();
@@ -83,8 +96,17 @@ class Service {
   /// Whether a reload was requested since the last call (run() polls it where it may rebuild
   /// its participant).
   bool TakeReloadRequest() { return reload_requested_.exchange(false); }
+  /// One turn of run()'s loop, for the loop guard (cheap: a relaxed increment).
+  void Turned() noexcept {
+    if (guard_ != nullptr) guard_->Turn();
+  }
+  /// What run()'s loop is doing now, named in the guard's message: a string literal.
+  void GuardPhase(const char* literal) noexcept {
+    if (guard_ != nullptr) guard_->Phase(literal);
+  }
 
  private:
+  LoopGuard* guard_ = nullptr;
   std::atomic<bool> stopped_{false};
   std::atomic<bool> reload_requested_{false};
   std::mutex mutex_;
@@ -120,6 +142,10 @@ class SignalWatcher {
   std::thread thread_;
 };
 
+/// The loop guard's turn limit: `option_s` (--stuck-exit-s; 0: off), raised to `longest_turn_s`
+/// plus a margin; 0 when the service has no guarded loop.
+double GuardedTurnLimitS(double option_s, std::optional<double> longest_turn_s);
+
 /// The main() of service S. S provides:
 ///   struct Options;                                   its own options, with defaults
 ///   static void AddOptions(CLI::App&, Options*);
@@ -152,6 +178,7 @@ int ServiceMain(int argc, char** argv, const std::string& description) {
     return cli::ToInt(cli::ExitCode::kInitializationError);
   }
   if (common.realtime_priority > 0) spdlog::info("real-time priority {} (SCHED_FIFO)", common.realtime_priority);
+  std::unique_ptr<LoopGuard> guard;  // outlives the service: it guards the service's deletion too
   std::unique_ptr<S> service;
   try {
     service = std::make_unique<S>(common, options);
@@ -165,6 +192,9 @@ int ServiceMain(int argc, char** argv, const std::string& description) {
     spdlog::error("cannot start: {}", e.what());
     return cli::ToInt(cli::ExitCode::kInitializationError);
   }
+  guard = std::make_unique<LoopGuard>(GuardedTurnLimitS(common.stuck_exit_s, service->LongestTurnS()),
+                                      LoopGuard::kStopGraceS);
+  service->AttachGuard(guard.get());
   signals.Watch(service.get());
   cli::ExitCode code;
   try {
@@ -173,9 +203,12 @@ int ServiceMain(int argc, char** argv, const std::string& description) {
     spdlog::error("{}", e.what());
     code = cli::ExitCode::kRuntimeError;
   }
+  guard->Phase("the deletion of its DDS entities and devices");
+  guard->Stopping();
   if (signals.signal() != 0) spdlog::info("stopped on signal {}", signals.signal());
   signals.Unwatch();
   service.reset();  // entities before participant, before the watcher goes
+  guard.reset();
   return cli::ToInt(code);
 }
 

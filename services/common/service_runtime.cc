@@ -51,6 +51,19 @@ void AddCommonOptions(CLI::App& app, CommonOptions* options) {
       ->envname("DPC_REALTIME_PRIORITY")
       ->check(CLI::Range(0, 99))
       ->capture_default_str();
+  app.add_option("--stuck-exit-s", options->stuck_exit_s,
+                 "Exit with code 1, saying where, when the service's loop has not turned for this long "
+                 "(a call into Fast DDS or a device that never returns), so that a supervisor restarts "
+                 "it; raised to what the service's own timeouts need. 0: never")
+      ->envname("DPC_STUCK_EXIT_S")
+      ->check([](const std::string& text) -> std::string {
+        double seconds = 0.0;
+        if (!CLI::detail::lexical_cast(text, seconds) || !(seconds == 0.0 || (seconds >= 1.0 && seconds <= 3600.0))) {
+          return "must be 0 (off) or from 1 to 3600 s, not " + text;
+        }
+        return {};
+      })
+      ->capture_default_str();
   app.add_option("--log-level", options->log_level, "trace|debug|info|warn|error|off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}))
       ->capture_default_str();

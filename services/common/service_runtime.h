@@ -27,6 +27,7 @@ struct CommonOptions {
   std::string security_dir;    ///< DDS Security credentials (make-bench-pki.sh); empty: off
   std::string identity;        ///< the identity in it; empty: the service's own role
   int realtime_priority = 0;   ///< SCHED_FIFO priority (1–99) for the service's threads; 0: off
+  double stuck_exit_s = 10.0;  ///< the loop guard's turn limit (LoopGuard); 0: off
 };
 
 /// "" if `id` may name a bench or a controller (1–63 of A–Z a–z 0–9 _ -: it becomes part of a
@@ -34,8 +35,8 @@ struct CommonOptions {
 std::string IdentifierProblem(const std::string& id);
 
 /// Adds --domain, --bench-id, the positional SCENARIO, --log-level, --security-dir and
-/// --identity (also from $DPC_SECURITY_DIR, $DPC_IDENTITY) and the scenario override flags of
-/// `dpc sim`.
+/// --identity (also from $DPC_SECURITY_DIR, $DPC_IDENTITY), --realtime-priority, --stuck-exit-s
+/// and the scenario override flags of `dpc sim`.
 void AddCommonOptions(CLI::App& app, CommonOptions* options);
 
 /// The text of deploy/scenarios/bench_default.pbtxt, compiled in.

@@ -77,18 +77,27 @@ class ControllerService final : public Service {
 
   ~ControllerService() override { DeleteEndpoints(); }
 
+  /// A turn waits one status period.
+  std::optional<double> LongestTurnS() const override {
+    return std::chrono::duration<double>(status_period_).count();
+  }
+
   /// Publishes the status every --status-period-s until stop(); a reload (SIGHUP) is done here,
   /// between two statuses.
   cli::ExitCode run() override {
     std::string last_condition;
+    GuardPhase("its status loop");
     while (!WaitForStopFor(status_period_)) {
+      Turned();
       // A SIGHUP, or a handshake stall: progress is a command written, which needs the driver's
       // description and the polarimeter's samples, which a stalled handshake with either
       // withholds. The controller answers no sample until its new readers are matched; the
       // driver meanwhile treats it as silent.
       if (const auto cause =
               maker_.ReloadCause(TakeReloadRequest(), *participant_, MonotonicNs(), progress_ns_.load())) {
+        GuardPhase("a reload of its DDS participant");
         maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); }, *cause);
+        GuardPhase("its status loop");
       }
       std::lock_guard<std::mutex> lock(mutex_);
       const ControllerStatusReport status =

@@ -109,14 +109,19 @@ class DriverService final : public Service {
 
   ~DriverService() override { DeleteEndpoints(); }
 
+  /// A tick waits at most kMaxSleepNs; the waveplates' I/O has a thread of its own.
+  std::optional<double> LongestTurnS() const override { return 0.0; }
+
   /// The ticker: wakes when the core's next deadline is due (a stand-in's wait, the obeyed
   /// controller's grace or silence timeout, the holding heartbeat), at most every --tick-s; a
   /// command that brings the deadline forward wakes it (WakeTickerIfSooner), and stop() at once.
   /// A reload (SIGHUP) is done here, between two ticks.
   cli::ExitCode run() override {
+    GuardPhase("its ticks");
     constexpr int64_t kMaxSleepNs = 5'000'000;
     std::unique_lock<std::mutex> lock(mutex_);
     while (!stopped()) {
+      Turned();
       // A SIGHUP, or a handshake stall: progress is a state that applies a command (holding is
       // none), which a controller or the polarimeter whose handshake with this driver stalled
       // withholds. Secured, the ticks go on on the old participant while the new one
@@ -125,7 +130,9 @@ class DriverService final : public Service {
       // where they are; then the usual rules (silence, hold, failover) apply to what arrives.
       if (const auto cause = maker_.ReloadCause(TakeReloadRequest(), *participant_, MonotonicNs(), progress_ns_)) {
         lock.unlock();
+        GuardPhase("a reload of its DDS participant");
         maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); }, *cause);
+        GuardPhase("its ticks");
         lock.lock();
       }
       const int64_t now_ns = MonotonicNs();

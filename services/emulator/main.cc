@@ -147,6 +147,9 @@ class EmulatorService final : public Service {
     for (const auto& p : ptys_) spdlog::info("{} on {}", InstrumentName(p->instrument), p->terminal.path());
   }
 
+  /// A turn polls for at most kMaxIdleNs; the instruments' sockets and terminals never block.
+  std::optional<double> LongestTurnS() const override { return 0.0; }
+
   cli::ExitCode run() override {
     nlohmann::ordered_json ready;
     ready["epc_tcp"] = listeners_[0].port;
@@ -158,7 +161,9 @@ class EmulatorService final : public Service {
     std::vector<pollfd> fds;
     std::vector<Target> targets;
     std::array<char, kReadChunkBytes> buffer;
+    GuardPhase("its polls");
     while (!stopped()) {
+      Turned();
       int64_t now_ns = MonotonicNs();
       fds.clear();
       targets.clear();

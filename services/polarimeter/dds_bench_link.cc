@@ -67,7 +67,9 @@ void DdsBenchLink::Publish(const BenchSample& sample) {
   // handshake with it withholds.
   if (const auto cause = maker_.ReloadCause(reload_requested_.exchange(false), *participant_, MonotonicNs(),
                                             progress_ns_.load(std::memory_order_relaxed))) {
+    phase_("a reload of its DDS participant");
     maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); }, *cause);
+    phase_("its samples");
   }
   WriteSample(sample);
   if (!summary_writer_) return;
@@ -99,6 +101,7 @@ std::optional<ControlVector> DdsBenchLink::AwaitAnswer(const BenchSample& sample
                         std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                             std::chrono::duration<double>(lockstep_timeout_s_));
   while (!answer_) {
+    turned_();
     if (stopped_) {
       *why = "stopped by signal";
       return std::nullopt;

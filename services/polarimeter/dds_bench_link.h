@@ -4,10 +4,12 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -36,7 +38,18 @@ class DdsBenchLink final : public BenchLink {
   std::optional<ControlVector> AwaitAnswer(const BenchSample& sample, std::string* why) override;
   bool TakeApplied(WaveplateMotion* motion) override;
   std::optional<TargetConfig> TargetChange() override;
-  bool stop_requested() override { return stopped_.load(std::memory_order_relaxed); }
+  /// Asked once per turn of the bench's real-time loops: a turn for the loop guard too.
+  bool stop_requested() override {
+    turned_();
+    return stopped_.load(std::memory_order_relaxed);
+  }
+  /// The loop guard's reports (Service::Turned, Service::GuardPhase): each turn of the bench's
+  /// loop (a sample, a failed reading, a lockstep wait's 100 ms) calls `turned`; a reload of
+  /// the participant is named by `phase` while it runs.
+  void SetLoopReports(std::function<void()> turned, std::function<void(const char*)> phase) {
+    turned_ = std::move(turned);
+    phase_ = std::move(phase);
+  }
 
   /// Thread-safe: the bench stops at its next sample; a lockstep wait ends at once.
   void Stop();
@@ -63,6 +76,8 @@ class DdsBenchLink final : public BenchLink {
   /// Whether `source` is the bench's driver (SourceBinding); else logs the refusal. Under mutex_.
   bool FromDriver(const SourceId& source, const char* what);
 
+  std::function<void()> turned_ = [] {};
+  std::function<void(const char*)> phase_ = [](const char*) {};
   std::string bench_id_;
   int control_count_;
   double lockstep_timeout_s_;

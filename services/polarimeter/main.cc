@@ -175,6 +175,7 @@ class PolarimeterService final : public Service {
           TraceHeaderLines(bench_.scenario(), bench_.chain(), bench_.target(), 1,
                            "dpc-polarimeter " + std::string(options.bench.lockstep ? "lockstep" : "real time")));
     }
+    link_.SetLoopReports([this] { Turned(); }, [this](const char* phase) { GuardPhase(phase); });
     for (const std::string& line : bus::DescribeShmCleanup(link_.participant().shm_cleanup())) {
       spdlog::info("{}", line);
     }
@@ -183,7 +184,15 @@ class PolarimeterService final : public Service {
                  bench_.control_count(), link_.participant().profiles_file(), common.domain_id);
   }
 
+  /// A turn is a sample (or a failed reading, or 100 ms of a lockstep wait); with an instrument,
+  /// one reading may take its connection (4 timeouts), the stream's start and the query.
+  std::optional<double> LongestTurnS() const override {
+    if (!instrument_) return 0.0;
+    return 6.0 * instrument_->device().link.response_timeout_s + 0.1;
+  }
+
   cli::ExitCode run() override {
+    GuardPhase("its samples");
     TraceObserver observer(trace_.get(), this);
     const BenchReport report =
         instrument_ ? bench_.RunInstrument(&link_, instrument_.get(), &observer,

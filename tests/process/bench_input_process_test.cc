@@ -7,10 +7,16 @@
 #include <algorithm>
 #include <cmath>
 #include <csignal>
+#include <cstring>
+#include <fcntl.h>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
+
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "support/bench_fixture.h"
 #include "support/json_lines.h"
@@ -135,6 +141,53 @@ TEST_F(BenchInputTest, ASecondDriverOnTheBenchIsDetectedAndTheLaterOneLeaves) {
   EXPECT_TRUE(Eventually([&] { return AppliedBy("A") > applied + 200; }, 10s));
   EXPECT_TRUE(SoonObeys("A"));
   EXPECT_NE(Logs().find("a second driver on bench bench1"), std::string::npos) << Logs();
+}
+
+/// A polarimeter whose --trace is a pipe that nobody reads: its loop blocks in write() for good,
+/// as it would in a call into Fast DDS that never returns. The read end stays open (never
+/// read) as long as the returned descriptor.
+int OpenUnreadPipe(const std::string& path) {
+  if (mkfifo(path.c_str(), 0600) != 0) return -1;
+  return open(path.c_str(), O_RDWR | O_NONBLOCK);
+}
+
+TEST_F(BenchInputTest, AServiceStuckInACallThatNeverReturnsSaysWhereAndExitsWithCode1) {
+  StartObserver(38);
+  // Not stuck: a process stopped as a whole (SIGSTOP) for longer than the limit, then resumed.
+  Process& paused = StartPolarimeter({"--rate-hz", "2000", "--stuck-exit-s", "1"}, "polarimeter_paused");
+  ASSERT_TRUE(Eventually([&] { return paused.Log().find("real time at") != std::string::npos; }, 20s)) << paused.Log();
+  paused.Signal(SIGSTOP);
+  std::this_thread::sleep_for(4s);
+  paused.Signal(SIGCONT);
+  std::this_thread::sleep_for(3s);
+  ASSERT_TRUE(paused.running()) << paused.Log();
+  paused.Signal(SIGTERM);
+  EXPECT_EQ(paused.Wait(20s), std::optional<int>(0)) << paused.Log();
+  EXPECT_EQ(paused.Log().find("stuck"), std::string::npos) << paused.Log();
+
+  const int pipe_fd = OpenUnreadPipe(dir_ + "/stuck_trace");
+  ASSERT_GE(pipe_fd, 0) << std::strerror(errno);
+  Process& stuck = StartPolarimeter({"--rate-hz", "2000", "--trace", dir_ + "/stuck_trace", "--stuck-exit-s", "2"});
+  const auto code = stuck.Wait(30s);
+  ASSERT_TRUE(code.has_value()) << "still running: " << stuck.Log();
+  EXPECT_EQ(*code, 1) << stuck.Log();
+  EXPECT_NE(stuck.Log().find("stuck: its loop has not turned for 2."), std::string::npos) << stuck.Log();
+  EXPECT_NE(stuck.Log().find("(stuck in: its samples)"), std::string::npos) << stuck.Log();
+
+  // The guard off, a SIGTERM cannot end the blocked loop: the stop grace ends the process.
+  const int deaf_pipe_fd = OpenUnreadPipe(dir_ + "/deaf_trace");
+  ASSERT_GE(deaf_pipe_fd, 0) << std::strerror(errno);
+  Process& deaf = StartPolarimeter({"--rate-hz", "2000", "--trace", dir_ + "/deaf_trace", "--stuck-exit-s", "0"},
+                                   "polarimeter_deaf");
+  ASSERT_TRUE(Eventually([&] { return deaf.Log().find("real time at") != std::string::npos; }, 20s)) << deaf.Log();
+  std::this_thread::sleep_for(1s);  // the pipe is full by now
+  deaf.Signal(SIGTERM);
+  const auto stop_code = deaf.Wait(30s);
+  close(pipe_fd);
+  close(deaf_pipe_fd);
+  ASSERT_TRUE(stop_code.has_value()) << "SIGTERM did not end it: " << deaf.Log();
+  EXPECT_EQ(*stop_code, 1) << deaf.Log();
+  EXPECT_NE(deaf.Log().find("did not end within 8."), std::string::npos) << deaf.Log();
 }
 
 }  // namespace

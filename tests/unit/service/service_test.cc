@@ -30,8 +30,17 @@ class WaitingService final : public Service {
     if (fail_with_ == "signal") kill(getpid(), SIGTERM);  // before run(): it must stop at once
   }
 
+  /// "stuck": a loop the guard watches, which never turns.
+  std::optional<double> LongestTurnS() const override {
+    return fail_with_ == "stuck" ? std::optional<double>(0.0) : std::nullopt;
+  }
+
   cli::ExitCode run() override {
     if (fail_with_ == "run") throw std::runtime_error("lost the device");
+    if (fail_with_ == "stuck") {
+      GuardPhase("a call that never returns");
+      for (;;) std::this_thread::sleep_for(1s);  // deaf to stop(), as a thread blocked in a deadlock
+    }
     const auto start = std::chrono::steady_clock::now();
     woken_ = WaitForStopFor(1h);
     waited_ = std::chrono::steady_clock::now() - start;
@@ -81,6 +90,23 @@ TEST(ServiceMainTest, MapsEachKindOfFailureToItsExitCode) {
   EXPECT_EQ(Main({"--fail-with", "start"}), cli::ToInt(cli::ExitCode::kInitializationError));
   EXPECT_EQ(Main({"--fail-with", "run"}), cli::ToInt(cli::ExitCode::kRuntimeError));
   EXPECT_EQ(Main({"--help"}), cli::ToInt(cli::ExitCode::kOk));
+}
+
+TEST(ServiceMainTest, AServiceWhoseLoopDoesNotTurnSaysWhereAndExitsWithCode1) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(Main({"--fail-with", "stuck", "--stuck-exit-s", "1"}), ::testing::ExitedWithCode(1),
+              "stuck: its loop has not turned for [0-9.]+ s \\(stuck in: a call that never returns\\)");
+}
+
+TEST(ServiceMainTest, TheStuckLimitIsCheckedAndAServiceWithoutALoopIsNotJudged) {
+  EXPECT_EQ(Main({"--stuck-exit-s", "0.5"}), cli::ToInt(cli::ExitCode::kInvalidInput));
+  EXPECT_EQ(Main({"--stuck-exit-s", "nan"}), cli::ToInt(cli::ExitCode::kInvalidInput));
+  EXPECT_EQ(Main({"--stuck-exit-s", "-1"}), cli::ToInt(cli::ExitCode::kInvalidInput));
+  // The limit is raised to a loop's own longest turn plus a margin, and 0 turns it off.
+  EXPECT_EQ(GuardedTurnLimitS(10.0, 0.0), 10.0);
+  EXPECT_EQ(GuardedTurnLimitS(10.0, 50.1), 52.1);
+  EXPECT_EQ(GuardedTurnLimitS(0.0, 0.0), 0.0);
+  EXPECT_EQ(GuardedTurnLimitS(10.0, std::nullopt), 0.0);
 }
 
 TEST(ServiceMainTest, SigtermStopsTheServiceCleanly) {

@@ -1,0 +1,123 @@
+// The loop guard: a loop that stops turning, or a stop that does not end, is reported once and
+// ends the process; a loop that turns, a limit of 0, and a process stopped as a whole are not.
+#include "loop_guard.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <thread>
+
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+namespace dpc::services {
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr int64_t kMs = 1'000'000;
+
+TEST(StuckJudgeTest, ALoopThatTurnsIsNeverStuck) {
+  StuckJudge judge(1000 * kMs, 8000 * kMs);
+  for (int64_t t = 0; t < 60'000; t += 100) EXPECT_EQ(judge.Look(t * kMs, t / 100, false, "its ticks"), "") << t;
+}
+
+TEST(StuckJudgeTest, ALoopThatStopsTurningIsStuckAfterTheLimitAndTheMessageSaysWhere) {
+  StuckJudge judge(1000 * kMs, 8000 * kMs);
+  EXPECT_EQ(judge.Look(0, 5, false, "its ticks"), "");
+  EXPECT_EQ(judge.Look(100 * kMs, 6, false, "its ticks"), "");  // the last turn seen
+  for (int64_t t = 200; t < 1100; t += 100) EXPECT_EQ(judge.Look(t * kMs, 6, false, "a reload"), "") << t;
+  const std::string why = judge.Look(1100 * kMs, 6, false, "a reload");
+  EXPECT_NE(why.find("its loop has not turned for 1.0 s (stuck in: a reload)"), std::string::npos) << why;
+  EXPECT_NE(why.find("--stuck-exit-s"), std::string::npos) << why;
+}
+
+TEST(StuckJudgeTest, ALimitOfZeroNeverJudgesTheLoop) {
+  StuckJudge judge(0, 8000 * kMs);
+  for (int64_t t = 0; t < 60'000; t += 100) EXPECT_EQ(judge.Look(t * kMs, 0, false, "x"), "") << t;
+}
+
+TEST(StuckJudgeTest, AStopMustEndWithinTheGraceWhateverTheLoopDoes) {
+  StuckJudge judge(0, 8000 * kMs);
+  EXPECT_EQ(judge.Look(0, 0, false, "x"), "");
+  for (int64_t t = 100; t < 8100; t += 100) EXPECT_EQ(judge.Look(t * kMs, t, true, "x"), "") << t;
+  const std::string why = judge.Look(8100 * kMs, 8100, true, "the deletion of its DDS entities");
+  EXPECT_NE(why.find("did not end within 8.0 s of being asked to stop (stuck in: the deletion of its DDS entities)"),
+            std::string::npos)
+      << why;
+}
+
+TEST(StuckJudgeTest, AProcessStoppedAsAWholeIsNotStuckWhenItResumes) {
+  // SIGSTOP for 30 s: the guard's own looks stop too; after SIGCONT the loop gets a whole new
+  // limit (and a stop a whole new grace) before anything is judged.
+  StuckJudge judge(1000 * kMs, 8000 * kMs);
+  EXPECT_EQ(judge.Look(0, 1, false, "x"), "");
+  EXPECT_EQ(judge.Look(30'000 * kMs, 1, true, "x"), "");
+  for (int64_t t = 30'100; t < 38'000; t += 100) EXPECT_EQ(judge.Look(t * kMs, 1, true, "x"), "") << t;
+  EXPECT_NE(judge.Look(38'000 * kMs, 1, true, "x"), "");
+  StuckJudge loop(1000 * kMs, 8000 * kMs);
+  EXPECT_EQ(loop.Look(0, 1, false, "x"), "");
+  EXPECT_EQ(loop.Look(30'000 * kMs, 1, false, "x"), "");
+  EXPECT_EQ(loop.Look(30'900 * kMs, 1, false, "x"), "");
+  EXPECT_NE(loop.Look(31'000 * kMs, 1, false, "x"), "");
+}
+
+/// A guard whose action records the message instead of ending the process.
+struct Recorded {
+  std::mutex mutex;
+  std::string why;
+  std::atomic<int> calls{0};
+  LoopGuard::OnStuck Action() {
+    return [this](const std::string& text) {
+      std::lock_guard<std::mutex> lock(mutex);
+      why = text;
+      ++calls;
+    };
+  }
+};
+
+TEST(LoopGuardTest, ATurningLoopIsLeftAloneAndAStuckOneIsReportedOnce) {
+  Recorded recorded;
+  {
+    LoopGuard guard(1.0, 8.0, recorded.Action());
+    const auto until = std::chrono::steady_clock::now() + 2s;
+    while (std::chrono::steady_clock::now() < until) {
+      guard.Turn();
+      std::this_thread::sleep_for(5ms);
+    }
+    EXPECT_EQ(recorded.calls.load(), 0);
+    guard.Phase("a call that never returns");
+    const auto deadline = std::chrono::steady_clock::now() + 30s;
+    while (recorded.calls.load() == 0 && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(10ms);
+    }
+    std::this_thread::sleep_for(500ms);  // no second report
+  }
+  EXPECT_EQ(recorded.calls.load(), 1);
+  EXPECT_NE(recorded.why.find("(stuck in: a call that never returns)"), std::string::npos) << recorded.why;
+}
+
+TEST(LoopGuardTest, AStopThatDoesNotEndIsReported) {
+  Recorded recorded;
+  LoopGuard guard(0.0, 1.0, recorded.Action());
+  guard.Stopping();
+  const auto deadline = std::chrono::steady_clock::now() + 30s;
+  while (recorded.calls.load() == 0 && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(10ms);
+  std::lock_guard<std::mutex> lock(recorded.mutex);
+  EXPECT_NE(recorded.why.find("did not end within"), std::string::npos) << recorded.why;
+}
+
+TEST(LoopGuardDeathTest, ExitStuckLogsWhyAndExitsWithCode1) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(
+      {
+        spdlog::set_default_logger(spdlog::stderr_color_mt("guard"));  // as a service logs (SetUpLogging)
+        LoopGuard::ExitStuck("stuck: its loop has not turned for 10.0 s");
+      },
+      ::testing::ExitedWithCode(1), "critical.*stuck: its loop has not turned for 10.0 s");
+}
+
+}  // namespace
+}  // namespace dpc::services
