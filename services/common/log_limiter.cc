@@ -56,6 +56,10 @@ std::string LogLimiter::KeyOf(std::string_view message) {
   return key;
 }
 
+std::string LogLimiter::KindOf(std::string_view message) {
+  return std::string(message.substr(0, message.find_first_of(":(0123456789")));
+}
+
 uint64_t LogLimiter::suppressed(const std::string& key) const {
   const auto found = entries_.find(key);
   return found == entries_.end() ? 0 : found->second.suppressed;

@@ -33,6 +33,10 @@ class LogLimiter {
   /// (a run of digits, with the points and commas between them) replaced by '#'. "holding: main
   /// silent for 3.25 ms" and "… for 41.70 ms" share a key; "holding: no controller yet" does not.
   static std::string KeyOf(std::string_view message);
+  /// A coarser key, for a condition whose text after its kind names a cause that may vary (a
+  /// controller's "unusable device description: …"): the message up to its first ':', '(' or
+  /// digit. "frozen" for "frozen: no sample for 25 ms", "standby " for "standby (following …)".
+  static std::string KindOf(std::string_view message);
 
   /// Lines of `key` counted but not logged since its last line.
   uint64_t suppressed(const std::string& key) const;

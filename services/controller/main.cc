@@ -24,12 +24,6 @@ namespace {
 
 namespace fdds = eprosima::fastdds::dds;
 
-/// "frozen" for "frozen: no sample for 25 ms", "tracking" for "tracking", …: what a condition is,
-/// without its figures.
-std::string ConditionKind(const std::string& condition) {
-  return condition.substr(0, condition.find_first_of(":(0123456789"));
-}
-
 class ControllerService final : public Service {
  public:
   struct Options {
@@ -107,7 +101,7 @@ class ControllerService final : public Service {
         // A condition that changes within its kind ("frozen: no sample for 25 ms", … 45 ms) is
         // logged at most every few seconds, with the count of changes it stands for.
         last_condition = status.condition;
-        log_.Log(spdlog::level::info, ConditionKind(last_condition),
+        log_.Log(spdlog::level::info, LogLimiter::KindOf(last_condition),
                  last_condition + (status.obeyed ? " (obeyed)" : ""));
       }
     }

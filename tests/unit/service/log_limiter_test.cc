@@ -84,6 +84,17 @@ TEST_F(LogLimiterTest, AKeyOfAMessageIgnoresItsFiguresOnly) {
                             "holding: main silent for 9.9 ms"));
 }
 
+TEST_F(LogLimiterTest, AKindOfAMessageIsItsTextBeforeItsFirstCauseOrFigure) {
+  EXPECT_EQ(LogLimiter::KindOf("frozen: no sample for 25 ms"), "frozen");
+  EXPECT_EQ(LogLimiter::KindOf("frozen: no sample for 25 ms"), LogLimiter::KindOf("frozen: no sample for 45 ms"));
+  EXPECT_EQ(LogLimiter::KindOf("unusable device description: 0 stages"),
+            LogLimiter::KindOf("unusable device description: a NaN axis"));
+  EXPECT_EQ(LogLimiter::KindOf("standby (following the applied φ)"), "standby ");
+  EXPECT_EQ(LogLimiter::KindOf("tracking"), "tracking");
+  EXPECT_EQ(LogLimiter::KindOf("3 stages"), "");
+  EXPECT_NE(LogLimiter::KindOf("tracking"), LogLimiter::KindOf("waiting for samples"));
+}
+
 TEST_F(LogLimiterTest, PeerEventsAreLoggedUpToABudgetPerWindowThenCounted) {
   PeerLog log([this] { return now_ns_; });
   log(false, "participant discovered: a (dpc-driver/bench1)");
