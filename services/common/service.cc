@@ -35,6 +35,15 @@ bool Service::WaitForStopUntil(std::chrono::steady_clock::time_point deadline) {
   return stop_requested_.wait_until(lock, deadline, [this] { return stopped(); });
 }
 
+void ExitStuck(const std::string& why) {
+  cli::ExitAfterSaying(
+      [why] {
+        spdlog::critical("{}", why);
+        spdlog::default_logger()->flush();
+      },
+      cli::ToInt(cli::ExitCode::kRuntimeError));
+}
+
 double GuardedTurnLimitS(double option_s, std::optional<double> longest_turn_s) {
   if (option_s <= 0.0 || !longest_turn_s) return 0.0;
   constexpr double kMarginS = 2.0;

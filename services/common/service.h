@@ -14,7 +14,7 @@
 //   SIGHUP                               RequestReload(): the service makes its DDS participant
 //                                        again from the credentials and profiles on disk (a
 //                                        rotation of DDS Security credentials without a restart)
-//   stuck (LoopGuard): its loop has not  kRuntimeError (1) at once, saying where it was stuck
+//   stuck (cli::LoopGuard): its loop has not  kRuntimeError (1) at once, saying where it was stuck
 //   turned for --stuck-exit-s, or it has  (a supervisor restarts it)
 //   not ended 8 s after a stop
 //
@@ -41,7 +41,7 @@
 #include "dpc/cli/command_line.h"
 #include "dpc/cli/exit_code.h"
 #include "dpc/config/scenario_error.h"
-#include "loop_guard.h"
+#include "dpc/cli/loop_guard.h"
 #include "service_runtime.h"
 
 namespace dpc::services {
@@ -68,7 +68,7 @@ class Service {
   /// only the stop grace is guarded.
   virtual std::optional<double> LongestTurnS() const { return std::nullopt; }
   /// Before run(): the guard that Turned(), GuardPhase() and stop() report to (ServiceMain's).
-  void AttachGuard(LoopGuard* guard) { guard_ = guard; }
+  void AttachGuard(cli::LoopGuard* guard) { guard_ = guard; }
 
   /// Thread-safe; wakes run() (and whatever OnStop wakes) at once. Idempotent.
   void stop();
@@ -106,7 +106,7 @@ class Service {
   }
 
  private:
-  LoopGuard* guard_ = nullptr;
+  cli::LoopGuard* guard_ = nullptr;
   std::atomic<bool> stopped_{false};
   std::atomic<bool> reload_requested_{false};
   std::mutex mutex_;
@@ -141,6 +141,10 @@ class SignalWatcher {
   std::atomic<bool> quitting_{false};
   std::thread thread_;
 };
+
+/// The loop guard's action: `why` logged (critical) and the process ended at once with code 1
+/// (cli::ExitAfterSaying).
+[[noreturn]] void ExitStuck(const std::string& why);
 
 /// The loop guard's turn limit: `option_s` (--stuck-exit-s; 0: off), raised to `longest_turn_s`
 /// plus a margin; 0 when the service has no guarded loop.
@@ -178,7 +182,7 @@ int ServiceMain(int argc, char** argv, const std::string& description) {
     return cli::ToInt(cli::ExitCode::kInitializationError);
   }
   if (common.realtime_priority > 0) spdlog::info("real-time priority {} (SCHED_FIFO)", common.realtime_priority);
-  std::unique_ptr<LoopGuard> guard;  // outlives the service: it guards the service's deletion too
+  std::unique_ptr<cli::LoopGuard> guard;  // outlives the service: it guards the service's deletion too
   std::unique_ptr<S> service;
   try {
     service = std::make_unique<S>(common, options);
@@ -192,8 +196,8 @@ int ServiceMain(int argc, char** argv, const std::string& description) {
     spdlog::error("cannot start: {}", e.what());
     return cli::ToInt(cli::ExitCode::kInitializationError);
   }
-  guard = std::make_unique<LoopGuard>(GuardedTurnLimitS(common.stuck_exit_s, service->LongestTurnS()),
-                                      LoopGuard::kStopGraceS);
+  guard = std::make_unique<cli::LoopGuard>(GuardedTurnLimitS(common.stuck_exit_s, service->LongestTurnS()),
+                                           cli::LoopGuard::kStopGraceS, ExitStuck);
   service->AttachGuard(guard.get());
   signals.Watch(service.get());
   cli::ExitCode code;

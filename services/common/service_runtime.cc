@@ -10,6 +10,7 @@
 #include <spdlog/spdlog.h>
 
 #include "dpc/bench/clock.h"
+#include "dpc/cli/loop_guard.h"
 #include "dpc/scenario_io/scenario_reader.h"
 #include "dpc/cli/scenario_loading.h"
 
@@ -56,13 +57,7 @@ void AddCommonOptions(CLI::App& app, CommonOptions* options) {
                  "(a call into Fast DDS or a device that never returns), so that a supervisor restarts "
                  "it; raised to what the service's own timeouts need. 0: never")
       ->envname("DPC_STUCK_EXIT_S")
-      ->check([](const std::string& text) -> std::string {
-        double seconds = 0.0;
-        if (!CLI::detail::lexical_cast(text, seconds) || !(seconds == 0.0 || (seconds >= 1.0 && seconds <= 3600.0))) {
-          return "must be 0 (off) or from 1 to 3600 s, not " + text;
-        }
-        return {};
-      })
+      ->check(cli::StuckExitProblem)
       ->capture_default_str();
   app.add_option("--log-level", options->log_level, "trace|debug|info|warn|error|off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}))

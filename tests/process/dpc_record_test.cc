@@ -6,7 +6,10 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cstring>
@@ -345,6 +348,25 @@ TEST_F(DpcRecordTest, ARecorderKilledWithSigkillLeavesAFileReadUpToItsLastChunk)
   EXPECT_EQ(info.exit_code, 1) << info.out << info.err;
   EXPECT_NE(info.out.find("NOT complete"), std::string::npos) << info.out;
   EXPECT_NE(info.out.find("dpc_stokes_sample"), std::string::npos) << info.out;
+}
+
+// A recording written into a pipe nobody reads: the writing loop blocks for good, as in a call
+// into Fast DDS that never returns. The loop guard says where and ends the recorder (exit 1).
+TEST_F(DpcRecordTest, ARecorderStuckInAWriteThatNeverReturnsSaysWhereAndExitsWithCode1) {
+  StartBench(92, 1000);
+  AwaitObeyed(92, "A");
+  const fs::path pipe = dir_ / "unread.mcap";
+  ASSERT_EQ(mkfifo(pipe.c_str(), 0600), 0) << std::strerror(errno);
+  const int read_end = open(pipe.c_str(), O_RDWR | O_NONBLOCK);  // open, never read
+  ASSERT_GE(read_end, 0) << std::strerror(errno);
+  Process& recorder = Start("record", {DPC_BINARY, "record", "-o", pipe.string(), "--domain", "92",
+                                       "--flush-interval-s", "0.25", "--stuck-exit-s", "2"});
+  const auto code = recorder.Wait(60s);
+  close(read_end);
+  ASSERT_TRUE(code.has_value()) << "still running: " << recorder.err();
+  EXPECT_EQ(*code, 1) << recorder.err();
+  EXPECT_NE(recorder.err().find("stuck: its loop has not turned for 2."), std::string::npos) << recorder.err();
+  EXPECT_NE(recorder.err().find("(stuck in: its drains)"), std::string::npos) << recorder.err();
 }
 
 // SIGHUP (a closed terminal, or the reload signal sent to every process of a bench) stops the

@@ -16,6 +16,7 @@
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/topics.h"
 #include "dpc/cli/command_line.h"
+#include "dpc/cli/loop_guard.h"
 #include "dpc/cli/scenario_loading.h"
 #include "dpc/config/scenario_validation.h"
 #include "dpc/msg/bench_idl.h"
@@ -97,6 +98,12 @@ CLI::App* AddRecordCommand(CLI::App& app, RecordOptions* o) {
                      "Write the chunk being filled at least this often: what a crash can lose at most")
       ->check(CLI::Range(0.05, 3600.0))
       ->capture_default_str();
+  record->add_option("--stuck-exit-s", o->stuck_exit_s,
+                     "Exit with code 1, saying where, when the recording loop has not turned for this long (a "
+                     "call into Fast DDS or a write that never returns): the file keeps what was flushed, and a "
+                     "supervisor can start a new one. 0: never")
+      ->check(cli::StuckExitProblem)
+      ->capture_default_str();
   return record;
 }
 
@@ -130,6 +137,18 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
   }
 
   StopSignals signals;
+  // Declared first: it also guards the end (the file closed, the participant deleted).
+  cli::LoopGuard guard(
+      o.stuck_exit_s, cli::LoopGuard::kStopGraceS,
+      [path = o.output_path](const std::string& why) {
+        cli::ExitAfterSaying(
+            [why, path] {
+              fmt::print(stderr, "\ndpc record: {}; {} keeps what was flushed (dpc info reads it)\n", why, path);
+            },
+            cli::ToInt(cli::ExitCode::kRuntimeError));
+      },
+      [] { return StopSignals::requested(); });
+  guard.Phase("its drains");
   try {
     record::McapWriter writer(o.output_path, {cli::VersionText("dpc record"),
                                               record::ParseMcapCompression(o.compression), 1 << 20});
@@ -213,8 +232,10 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
     auto next_status = start + std::chrono::seconds(1);
     auto next_flush = start + std::chrono::duration_cast<Clock::duration>(flush_interval);
     for (;;) {
+      guard.Turn();
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       drain();
+      guard.Phase("a reload of its DDS participant");
       const bool healed = participant.Heal(
           [&] {
             drain();  // what the old readers hold is kept
@@ -222,6 +243,7 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
             for (Channel& channel : channels) channel.reader.reset();
           },
           make_readers);
+      guard.Phase("its drains");
       if (healed) {
         // The gap it leaves shows in the samples' accounting; the file says when it was.
         writer.WriteMetadata({"participant_reload",
@@ -245,6 +267,8 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
       }
       if (done) break;
     }
+    guard.Phase("closing the file and deleting its DDS entities");
+    guard.Stopping();
     if (on_terminal) fmt::print(stderr, "\r\x1b[K");
     drain();
     writer.WriteMetadata({"recording",

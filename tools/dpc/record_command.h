@@ -25,6 +25,7 @@ struct RecordOptions {
   std::string compression = "zstd";
   std::string scenario_path;        ///< kept as metadata "scenario" (validated first)
   double flush_interval_s = 1.0;    ///< the chunk being filled is written at least this often
+  double stuck_exit_s = 10.0;       ///< the loop guard's turn limit (cli::LoopGuard); 0: off
 };
 
 CLI::App* AddRecordCommand(CLI::App& app, RecordOptions* options);

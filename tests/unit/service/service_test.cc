@@ -3,6 +3,7 @@
 #include "service.h"
 
 #include <gtest/gtest.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
 
 #include <signal.h>
 #include <unistd.h>
@@ -96,6 +97,16 @@ TEST(ServiceMainTest, AServiceWhoseLoopDoesNotTurnSaysWhereAndExitsWithCode1) {
   GTEST_FLAG_SET(death_test_style, "threadsafe");
   EXPECT_EXIT(Main({"--fail-with", "stuck", "--stuck-exit-s", "1"}), ::testing::ExitedWithCode(1),
               "stuck: its loop has not turned for [0-9.]+ s \\(stuck in: a call that never returns\\)");
+}
+
+TEST(ServiceMainTest, ExitStuckLogsWhyAndExitsWithCode1) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(
+      {
+        spdlog::set_default_logger(spdlog::stderr_color_mt("guard"));  // as a service logs (SetUpLogging)
+        ExitStuck("stuck: its loop has not turned for 10.0 s");
+      },
+      ::testing::ExitedWithCode(1), "critical.*stuck: its loop has not turned for 10.0 s");
 }
 
 TEST(ServiceMainTest, TheStuckLimitIsCheckedAndAServiceWithoutALoopIsNotJudged) {

@@ -1,6 +1,6 @@
 // The loop guard: a loop that stops turning, or a stop that does not end, is reported once and
 // ends the process; a loop that turns, a limit of 0, and a process stopped as a whole are not.
-#include "loop_guard.h"
+#include "dpc/cli/loop_guard.h"
 
 #include <gtest/gtest.h>
 
@@ -9,10 +9,9 @@
 #include <mutex>
 #include <thread>
 
-#include <spdlog/sinks/stdout_color_sinks.h>
-#include <spdlog/spdlog.h>
+#include <cstdio>
 
-namespace dpc::services {
+namespace dpc::cli {
 namespace {
 
 using namespace std::chrono_literals;
@@ -109,15 +108,25 @@ TEST(LoopGuardTest, AStopThatDoesNotEndIsReported) {
   EXPECT_NE(recorded.why.find("did not end within"), std::string::npos) << recorded.why;
 }
 
-TEST(LoopGuardDeathTest, ExitStuckLogsWhyAndExitsWithCode1) {
+TEST(LoopGuardTest, AStopFlagThatASignalHandlerSetsCountsAsAStop) {
+  Recorded recorded;
+  std::atomic<bool> flag{false};
+  LoopGuard guard(0.0, 1.0, recorded.Action(), [&flag] { return flag.load(); });
+  std::this_thread::sleep_for(1500ms);
+  EXPECT_EQ(recorded.calls.load(), 0) << "no stop asked yet";
+  flag = true;
+  const auto deadline = std::chrono::steady_clock::now() + 30s;
+  while (recorded.calls.load() == 0 && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(10ms);
+  EXPECT_EQ(recorded.calls.load(), 1);
+}
+
+TEST(LoopGuardDeathTest, ExitAfterSayingSaysAndExitsWithTheCode) {
   GTEST_FLAG_SET(death_test_style, "threadsafe");
-  EXPECT_EXIT(
-      {
-        spdlog::set_default_logger(spdlog::stderr_color_mt("guard"));  // as a service logs (SetUpLogging)
-        LoopGuard::ExitStuck("stuck: its loop has not turned for 10.0 s");
-      },
-      ::testing::ExitedWithCode(1), "critical.*stuck: its loop has not turned for 10.0 s");
+  EXPECT_EXIT(ExitAfterSaying([] { std::fputs("stuck: said\n", stderr); }, 1), ::testing::ExitedWithCode(1),
+              "stuck: said");
+  // A saying that never ends does not keep the process: it exits after 1 s all the same.
+  EXPECT_EXIT(ExitAfterSaying([] { for (;;) std::this_thread::sleep_for(1s); }, 3), ::testing::ExitedWithCode(3), "");
 }
 
 }  // namespace
-}  // namespace dpc::services
+}  // namespace dpc::cli

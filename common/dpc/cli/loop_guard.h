@@ -1,19 +1,20 @@
 #pragma once
-// A service that is stuck says so and exits, rather than hang unseen. The main thread of every
-// service runs a loop that never waits long (the driver's ticks, the polarimeter's samples, the
-// controller's statuses, the emulator's polls) and counts each turn (Turn). A guard thread looks
-// at the count a few times a second:
+// A program that is stuck says so and exits, rather than hang unseen. The main thread of every
+// bench service and of `dpc record` runs a loop that never waits long (the driver's ticks, the
+// polarimeter's samples, the controller's statuses, the emulator's polls, the recorder's
+// drains) and counts each turn (Turn). A guard thread looks at the count ten times a second:
 //
-//   - the loop has not turned for the turn limit (--stuck-exit-s, raised to what the service's
-//     own bounded waits need, Service::LongestTurnS): a call that does not return — Fast DDS
-//     2.9 can deadlock inside a secured participant and block the thread that deletes a reader;
-//     a trace written into a pipe nobody reads — holds the loop;
-//   - the service was asked to stop (SIGINT, SIGTERM, or its run ended) and has not ended
-//     within the stop grace: run() or the deletion of its DDS entities does not return.
+//   - the loop has not turned for the turn limit (--stuck-exit-s, raised to what the program's
+//     own bounded waits need): a call that does not return — Fast DDS 2.9 can deadlock inside a
+//     secured participant and block the thread that deletes a reader; a file written into a
+//     pipe nobody reads — holds the loop;
+//   - the program was asked to stop (SIGINT, SIGTERM, or its run ended) and has not ended
+//     within the stop grace: its loop or the deletion of its DDS entities does not return.
 //
-// Then it logs why (what the loop was doing: Phase) and the process exits at once with code 1
-// (cli::ExitCode::kRuntimeError), so that a supervisor (compose's restart policy, systemd)
-// restarts it; a driver restarted so starts from the waveplates' read-back φ.
+// Then `on_stuck` says why (what the loop was doing: Phase) and ends the process at once with
+// code 1 (cli::ExitCode::kRuntimeError; ExitAfterSaying), so that a supervisor (compose's
+// restart policy, systemd) restarts it; a driver restarted so starts from the waveplates'
+// read-back φ.
 //
 // A process stopped as a whole (SIGSTOP, a suspended machine) is not stuck: when the guard
 // itself has not run for kPauseNs, it starts its windows again.
@@ -27,7 +28,7 @@
 #include <string_view>
 #include <thread>
 
-namespace dpc::services {
+namespace dpc::cli {
 
 /// What the guard decides, without threads or clocks: one Look at a time.
 class StuckJudge {
@@ -53,15 +54,25 @@ class StuckJudge {
   int64_t stop_seen_ns_ = -1;   ///< when a stop was first seen (-1: none yet)
 };
 
+/// The check of --stuck-exit-s (the turn limit in seconds): "" if `text` is 0 (off) or from 1 to
+/// 3600, else why not.
+std::string StuckExitProblem(const std::string& text);
+
+/// Runs `say` (a line for the log) on a thread of its own, gives it at most 1 s (the stuck thread
+/// may hold the log's sink: a stderr nobody reads), then ends the process at once with `code`,
+/// without destructors or exit handlers.
+[[noreturn]] void ExitAfterSaying(std::function<void()> say, int code);
+
 class LoopGuard {
  public:
   using OnStuck = std::function<void(const std::string& why)>;
   static constexpr int64_t kLookPeriodNs = 100'000'000;
   static constexpr double kStopGraceS = 8.0;  ///< below compose's 10-s stop_grace_period
 
-  /// Starts the guard's thread. `turn_limit_s` 0: the loop is not judged. `on_stuck` (called once,
-  /// from the guard's thread) defaults to ExitStuck.
-  LoopGuard(double turn_limit_s, double stop_grace_s, OnStuck on_stuck = ExitStuck);
+  /// Starts the guard's thread. `turn_limit_s` 0: the loop is not judged. `on_stuck` is called
+  /// once, from the guard's thread (it normally ends the process: ExitAfterSaying).
+  /// `stop_requested`, if given, is asked at each look too (a flag a signal handler sets).
+  LoopGuard(double turn_limit_s, double stop_grace_s, OnStuck on_stuck, std::function<bool()> stop_requested = {});
   ~LoopGuard();
   LoopGuard(const LoopGuard&) = delete;
   LoopGuard& operator=(const LoopGuard&) = delete;
@@ -73,15 +84,12 @@ class LoopGuard {
   /// A stop was asked, or run() ended: the process must end within the stop grace.
   void Stopping() noexcept { stopping_.store(true, std::memory_order_relaxed); }
 
-  /// Logs `why` (critical; given at most 1 s, in case the log's own sink is what blocks) and
-  /// ends the process at once with code 1, without destructors or exit handlers.
-  [[noreturn]] static void ExitStuck(const std::string& why);
-
  private:
   void Watch();
 
   StuckJudge judge_;
   OnStuck on_stuck_;
+  std::function<bool()> stop_requested_;
   std::atomic<uint64_t> turns_{0};
   std::atomic<const char*> phase_{"its loop"};
   std::atomic<bool> stopping_{false};
@@ -91,4 +99,4 @@ class LoopGuard {
   std::thread thread_;
 };
 
-}  // namespace dpc::services
+}  // namespace dpc::cli

@@ -1,18 +1,15 @@
-#include "loop_guard.h"
+#include "dpc/cli/loop_guard.h"
 
 #include <unistd.h>
 
 #include <chrono>
+#include <exception>
 #include <memory>
 #include <utility>
 
 #include <fmt/format.h>
-#include <spdlog/spdlog.h>
 
-#include "dpc/bench/clock.h"
-#include "dpc/cli/exit_code.h"
-
-namespace dpc::services {
+namespace dpc::cli {
 
 std::string StuckJudge::Look(int64_t now_ns, uint64_t turns, bool stopping, std::string_view phase) {
   if (!looked_ || now_ns - last_look_ns_ >= kPauseNs) {
@@ -45,9 +42,11 @@ std::string StuckJudge::Look(int64_t now_ns, uint64_t turns, bool stopping, std:
   return {};
 }
 
-LoopGuard::LoopGuard(double turn_limit_s, double stop_grace_s, OnStuck on_stuck)
+LoopGuard::LoopGuard(double turn_limit_s, double stop_grace_s, OnStuck on_stuck,
+                     std::function<bool()> stop_requested)
     : judge_(static_cast<int64_t>(turn_limit_s * 1e9), static_cast<int64_t>(stop_grace_s * 1e9)),
-      on_stuck_(std::move(on_stuck)) {
+      on_stuck_(std::move(on_stuck)),
+      stop_requested_(std::move(stop_requested)) {
   thread_ = std::thread([this] { Watch(); });
 }
 
@@ -63,9 +62,12 @@ LoopGuard::~LoopGuard() {
 void LoopGuard::Watch() {
   std::unique_lock<std::mutex> lock(mutex_);
   while (!wake_.wait_for(lock, std::chrono::nanoseconds(kLookPeriodNs), [this] { return quitting_; })) {
+    const int64_t now_ns =
+        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+            .count();
+    const bool stopping = stopping_.load(std::memory_order_relaxed) || (stop_requested_ && stop_requested_());
     const std::string why =
-        judge_.Look(MonotonicNs(), turns_.load(std::memory_order_relaxed), stopping_.load(std::memory_order_relaxed),
-                    phase_.load(std::memory_order_relaxed));
+        judge_.Look(now_ns, turns_.load(std::memory_order_relaxed), stopping, phase_.load(std::memory_order_relaxed));
     if (why.empty()) continue;
     lock.unlock();
     on_stuck_(why);
@@ -73,17 +75,28 @@ void LoopGuard::Watch() {
   }
 }
 
-void LoopGuard::ExitStuck(const std::string& why) {
-  // The stuck thread may hold the log's sink (a stderr nobody reads): the line is written by a
-  // thread of its own, and the process ends whether or not it could be.
-  auto written = std::make_shared<std::atomic<bool>>(false);
-  std::thread([why, written] {
-    spdlog::critical("{}", why);
-    spdlog::default_logger()->flush();
-    written->store(true);
-  }).detach();
-  for (int i = 0; i < 100 && !written->load(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  _exit(cli::ToInt(cli::ExitCode::kRuntimeError));
+std::string StuckExitProblem(const std::string& text) {
+  size_t used = 0;
+  double seconds = 0.0;
+  try {
+    seconds = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !(seconds == 0.0 || (seconds >= 1.0 && seconds <= 3600.0))) {
+    return "must be 0 (off) or from 1 to 3600 s, not " + text;
+  }
+  return {};
 }
 
-}  // namespace dpc::services
+void ExitAfterSaying(std::function<void()> say, int code) {
+  auto said = std::make_shared<std::atomic<bool>>(false);
+  std::thread([say = std::move(say), said] {
+    say();
+    said->store(true);
+  }).detach();
+  for (int i = 0; i < 100 && !said->load(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  _exit(code);
+}
+
+}  // namespace dpc::cli
