@@ -165,6 +165,11 @@ TEST_F(DpcRecordTest, BadCommandLinesExit2NamingTheProblemAndCreateNoFile) {
   EXPECT_EQ(r.exit_code, 2) << r.err;
   r = Dpc({"record", "-o", out, "--flush-interval-s", "0", "--domain", "90"});
   EXPECT_EQ(r.exit_code, 2) << r.err;
+  for (const char* limit : {"0.5", "nan", "-1", "1e9", "10s"}) {
+    r = Dpc({"record", "-o", out, "--stuck-exit-s", limit, "--domain", "90"});
+    EXPECT_EQ(r.exit_code, 2) << limit << ": " << r.err;
+    EXPECT_NE(r.err.find("--stuck-exit-s"), std::string::npos) << r.err;
+  }
   EXPECT_FALSE(fs::exists(out));
   r = Dpc({"record", "-o", (dir_ / "no-such-dir" / "r.mcap").string(), "--duration-s", "1", "--domain", "90"});
   EXPECT_EQ(r.exit_code, 1) << r.err;

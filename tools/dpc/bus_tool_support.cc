@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "dpc/bench/clock.h"
+#include "dpc/cli/exit_code.h"
 
 namespace dpc::tools {
 namespace {
@@ -84,6 +85,25 @@ StopSignals::~StopSignals() {
 }
 
 bool StopSignals::requested() { return g_stop_requested.load(); }
+
+void AddStuckExitOption(CLI::App& command, double* seconds, const std::string& what) {
+  command.add_option("--stuck-exit-s", *seconds,
+                     "Exit with code 1, saying where, when the command's loop has not turned for this long (a "
+                     "call into Fast DDS or a write that never returns)" + what + ". 0: never")
+      ->check(cli::StuckExitProblem)
+      ->capture_default_str();
+}
+
+std::unique_ptr<cli::LoopGuard> GuardCommandLoop(const std::string& command, double stuck_exit_s,
+                                                 const std::string& after) {
+  return std::make_unique<cli::LoopGuard>(
+      stuck_exit_s, cli::LoopGuard::kStopGraceS,
+      [command, after](const std::string& why) {
+        cli::ExitAfterSaying([command, after, why] { fmt::print(stderr, "\ndpc {}: {}{}\n", command, why, after); },
+                             cli::ToInt(cli::ExitCode::kRuntimeError));
+      },
+      [] { return StopSignals::requested(); });
+}
 
 bool WaitFor(const std::function<bool()>& done, double timeout_s) {
   const auto start = std::chrono::steady_clock::now();

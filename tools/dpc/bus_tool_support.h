@@ -14,6 +14,7 @@
 
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/participant_maker.h"
+#include "dpc/cli/loop_guard.h"
 
 namespace dpc::tools {
 
@@ -90,6 +91,16 @@ class StopSignals {
   struct sigaction old_hup_ {};
   struct sigaction old_pipe_ {};
 };
+
+/// --stuck-exit-s of a long-running command: the turn limit of its loop guard (`what` ends the
+/// help: what the program leaves behind when it exits so).
+void AddStuckExitOption(CLI::App& command, double* seconds, const std::string& what);
+
+/// The guard of a long-running command's loop (cli::LoopGuard; the caller turns it): a stop is a
+/// stop signal (StopSignals::requested) or Stopping(); stuck, it prints "dpc <command>: <why><after>"
+/// on stderr and the process exits with code 1. `stuck_exit_s` 0: only the stop is guarded.
+std::unique_ptr<cli::LoopGuard> GuardCommandLoop(const std::string& command, double stuck_exit_s,
+                                                 const std::string& after = {});
 
 /// Polls `done` every few milliseconds until it is true (returns true), the deadline passes or a
 /// stop signal arrives (returns false). A zero or negative `timeout_s` means no deadline.

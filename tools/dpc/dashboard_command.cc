@@ -261,6 +261,7 @@ CLI::App* AddDashboardCommand(CLI::App& app, DashboardOptions* o) {
   dashboard->add_option("--duration-s", o->duration_s, "Stop after this long (0: until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  AddStuckExitOption(*dashboard, &o->stuck_exit_s, " (a supervisor then starts it again)");
   return dashboard;
 }
 
@@ -278,6 +279,9 @@ cli::ExitCode RunDashboardCommand(const DashboardOptions& o) {
     return cli::ExitCode::kInitializationError;
   }
   StopSignals signals;
+  // Made first: it also guards the end (the participant and the web server deleted).
+  const std::unique_ptr<cli::LoopGuard> guard = GuardCommandLoop("dashboard", o.stuck_exit_s);
+  guard->Phase("its start");
   try {
     std::mutex mutex;
     const auto start = Clock::now();
@@ -369,12 +373,16 @@ cli::ExitCode RunDashboardCommand(const DashboardOptions& o) {
 
     const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / o.push_hz));
     auto next = start + period;
+    guard->Phase("its pushes");
     while (!StopSignals::requested()) {
       while (Clock::now() < next && !StopSignals::requested()) {
+        guard->Turn();
         std::this_thread::sleep_for(std::min<Clock::duration>(next - Clock::now(), std::chrono::milliseconds(20)));
       }
       if (StopSignals::requested()) break;
+      guard->Phase("a reload of its DDS participant");
       participant.Heal(delete_endpoints, make_endpoints);
+      guard->Phase("its pushes");
       next += period;
       if (next < Clock::now()) next = Clock::now() + period;  // fell behind: do not burst
       json snapshot;
@@ -391,6 +399,8 @@ cli::ExitCode RunDashboardCommand(const DashboardOptions& o) {
       requests.ExpireOld();
       if (o.duration_s > 0 && now_s() >= o.duration_s) break;
     }
+    guard->Phase("the deletion of its DDS entities and its web server");
+    guard->Stopping();
     if (StopSignals::requested()) fmt::print(stderr, "dpc dashboard: stopped by signal\n");
     return cli::ExitCode::kOk;
   } catch (const std::exception& e) {

@@ -41,6 +41,7 @@ struct DashboardOptions {
   double lock_threshold_deg = 10.0;
   std::string assets_dir;  ///< empty: DefaultDashboardAssets()
   double duration_s = 0.0;
+  double stuck_exit_s = 10.0;  ///< the loop guard's turn limit (cli::LoopGuard); 0: off
 };
 
 CLI::App* AddDashboardCommand(CLI::App& app, DashboardOptions* options);

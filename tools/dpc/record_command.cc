@@ -16,7 +16,6 @@
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/topics.h"
 #include "dpc/cli/command_line.h"
-#include "dpc/cli/loop_guard.h"
 #include "dpc/cli/scenario_loading.h"
 #include "dpc/config/scenario_validation.h"
 #include "dpc/msg/bench_idl.h"
@@ -98,12 +97,7 @@ CLI::App* AddRecordCommand(CLI::App& app, RecordOptions* o) {
                      "Write the chunk being filled at least this often: what a crash can lose at most")
       ->check(CLI::Range(0.05, 3600.0))
       ->capture_default_str();
-  record->add_option("--stuck-exit-s", o->stuck_exit_s,
-                     "Exit with code 1, saying where, when the recording loop has not turned for this long (a "
-                     "call into Fast DDS or a write that never returns): the file keeps what was flushed, and a "
-                     "supervisor can start a new one. 0: never")
-      ->check(cli::StuckExitProblem)
-      ->capture_default_str();
+  AddStuckExitOption(*record, &o->stuck_exit_s, ": the file keeps what was flushed, and a supervisor can start a new one");
   return record;
 }
 
@@ -137,17 +131,10 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
   }
 
   StopSignals signals;
-  // Declared first: it also guards the end (the file closed, the participant deleted).
-  cli::LoopGuard guard(
-      o.stuck_exit_s, cli::LoopGuard::kStopGraceS,
-      [path = o.output_path](const std::string& why) {
-        cli::ExitAfterSaying(
-            [why, path] {
-              fmt::print(stderr, "\ndpc record: {}; {} keeps what was flushed (dpc info reads it)\n", why, path);
-            },
-            cli::ToInt(cli::ExitCode::kRuntimeError));
-      },
-      [] { return StopSignals::requested(); });
+  // Made first: it also guards the end (the file closed, the participant deleted).
+  const std::unique_ptr<cli::LoopGuard> guarded =
+      GuardCommandLoop("record", o.stuck_exit_s, "; " + o.output_path + " keeps what was flushed (dpc info reads it)");
+  cli::LoopGuard& guard = *guarded;
   guard.Phase("its drains");
   try {
     record::McapWriter writer(o.output_path, {cli::VersionText("dpc record"),
