@@ -6,6 +6,7 @@
 //   dpc-polarimeter … --input-recording FILE.mcap [--input-from-s T]  the input SOP of a recording
 //   dpc-polarimeter SCENARIO-WITH-polarimeter_device [--rate-hz N]    a real polarimeter (serial/TCP)
 
+#include <functional>
 #include <iostream>
 #include <memory>
 
@@ -52,10 +53,11 @@ struct PolarimeterOptions {
 
 /// The scenario, with the input SOP of a recording in place of its own when one is given.
 /// The lockstep's progress in the log, at most every 2 s ("lockstep: 4096 of 10000 samples"; dpc
-/// evaluate shows it).
-PolarimeterOptions WithProgressLog(PolarimeterOptions o) {
+/// evaluate shows it); each call (every 1024 samples) is also a turn for the loop guard.
+PolarimeterOptions WithProgressLog(PolarimeterOptions o, std::function<void()> turned) {
   auto next_ns = std::make_shared<int64_t>(0);
-  o.bench.lockstep_progress = [next_ns](int64_t done, int64_t total) {
+  o.bench.lockstep_progress = [next_ns, turned = std::move(turned)](int64_t done, int64_t total) {
+    turned();  // a lockstep run's samples before the control starts never reach the link
     const int64_t now_ns = MonotonicNs();
     if (now_ns < *next_ns) return;
     *next_ns = now_ns + 2'000'000'000;
@@ -145,7 +147,7 @@ class PolarimeterService final : public Service {
 
   PolarimeterService(const CommonOptions& common, const Options& options)
       : options_(options),
-        bench_(LoadPolarimeterScenario(common, options), WithProgressLog(options).bench),  // validates: ScenarioError
+        bench_(LoadPolarimeterScenario(common, options), WithProgressLog(options, [this] { Turned(); }).bench),  // validates: ScenarioError
 
         // The loop latency is counted, like the error, once the loop has settled: in real time
         // from --settle-s into the run (the first samples meet a controller re-joining and
