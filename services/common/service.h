@@ -14,9 +14,9 @@
 //   SIGHUP                               RequestReload(): the service makes its DDS participant
 //                                        again from the credentials and profiles on disk (a
 //                                        rotation of DDS Security credentials without a restart)
-//   stuck (cli::LoopGuard): its loop has not  kRuntimeError (1) at once, saying where it was stuck
-//   turned for --stuck-exit-s, or it has  (a supervisor restarts it)
-//   not ended 8 s after a stop
+//   stuck: its loop has not turned for   kRuntimeError (1) at once, saying where it
+//   --stuck-exit-s, or it has not ended  was stuck (cli::LoopGuard): a supervisor
+//   8 s after a stop                     restarts it
 //
 // SIGINT, SIGTERM and SIGHUP are blocked in every thread (before Fast DDS starts its own) and
 // taken by one watcher thread (sigwait), which calls stop() or RequestReload(): docker stops
@@ -40,8 +40,8 @@
 
 #include "dpc/cli/command_line.h"
 #include "dpc/cli/exit_code.h"
-#include "dpc/config/scenario_error.h"
 #include "dpc/cli/loop_guard.h"
+#include "dpc/config/scenario_error.h"
 #include "service_runtime.h"
 
 namespace dpc::services {

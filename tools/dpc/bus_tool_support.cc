@@ -90,6 +90,7 @@ void AddStuckExitOption(CLI::App& command, double* seconds, const std::string& w
   command.add_option("--stuck-exit-s", *seconds,
                      "Exit with code 1, saying where, when the command's loop has not turned for this long (a "
                      "call into Fast DDS or a write that never returns)" + what + ". 0: never")
+      ->envname("DPC_STUCK_EXIT_S")
       ->check(cli::StuckExitProblem)
       ->capture_default_str();
 }
