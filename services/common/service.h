@@ -100,10 +100,9 @@ class Service {
   void Turned() noexcept {
     if (guard_ != nullptr) guard_->Turn();
   }
-  /// What run()'s loop is doing now, named in the guard's message: a string literal.
-  void GuardPhase(const char* literal) noexcept {
-    if (guard_ != nullptr) guard_->Phase(literal);
-  }
+  /// What run()'s loop is doing now, named in the guard's message: a string literal. Returns the
+  /// phase it replaces (nullptr without a guard).
+  const char* GuardPhase(const char* literal) noexcept { return guard_ != nullptr ? guard_->Phase(literal) : nullptr; }
 
  private:
   cli::LoopGuard* guard_ = nullptr;

@@ -81,6 +81,7 @@ class ControllerService final : public Service {
   cli::ExitCode run() override {
     std::string last_condition;
     GuardPhase("its status loop");
+    maker_.SetPhaseReport([this](const char* phase) { return GuardPhase(phase); });
     while (!WaitForStopFor(status_period_)) {
       Turned();
       // A SIGHUP, or a handshake stall: progress is a command written, which needs the driver's
@@ -89,9 +90,7 @@ class ControllerService final : public Service {
       // driver meanwhile treats it as silent.
       if (const auto cause =
               maker_.ReloadCause(TakeReloadRequest(), *participant_, MonotonicNs(), progress_ns_.load())) {
-        GuardPhase("a reload of its DDS participant");
         maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); }, *cause);
-        GuardPhase("its status loop");
       }
       std::lock_guard<std::mutex> lock(mutex_);
       const ControllerStatusReport status =

@@ -118,6 +118,7 @@ class DriverService final : public Service {
   /// A reload (SIGHUP) is done here, between two ticks.
   cli::ExitCode run() override {
     GuardPhase("its ticks");
+    maker_.SetPhaseReport([this](const char* phase) { return GuardPhase(phase); });
     constexpr int64_t kMaxSleepNs = 5'000'000;
     std::unique_lock<std::mutex> lock(mutex_);
     while (!stopped()) {
@@ -130,9 +131,7 @@ class DriverService final : public Service {
       // where they are; then the usual rules (silence, hold, failover) apply to what arrives.
       if (const auto cause = maker_.ReloadCause(TakeReloadRequest(), *participant_, MonotonicNs(), progress_ns_)) {
         lock.unlock();
-        GuardPhase("a reload of its DDS participant");
         maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); }, *cause);
-        GuardPhase("its ticks");
         lock.lock();
       }
       const int64_t now_ns = MonotonicNs();

@@ -67,9 +67,7 @@ void DdsBenchLink::Publish(const BenchSample& sample) {
   // handshake with it withholds.
   if (const auto cause = maker_.ReloadCause(reload_requested_.exchange(false), *participant_, MonotonicNs(),
                                             progress_ns_.load(std::memory_order_relaxed))) {
-    phase_("a reload of its DDS participant");
     maker_.Reload(&participant_, [this] { DeleteEndpoints(); }, [this] { MakeEndpoints(); }, *cause);
-    phase_("its samples");
   }
   WriteSample(sample);
   if (!summary_writer_) return;

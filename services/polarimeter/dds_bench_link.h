@@ -45,10 +45,10 @@ class DdsBenchLink final : public BenchLink {
   }
   /// The loop guard's reports (Service::Turned, Service::GuardPhase): each turn of the bench's
   /// loop (a sample, a failed reading, a lockstep wait's 100 ms) calls `turned`; a reload of
-  /// the participant is named by `phase` while it runs.
-  void SetLoopReports(std::function<void()> turned, std::function<void(const char*)> phase) {
+  /// the participant is named by `phase` while it runs (bus::ParticipantMaker::PhaseReport).
+  void SetLoopReports(std::function<void()> turned, bus::ParticipantMaker::PhaseReport phase) {
     turned_ = std::move(turned);
-    phase_ = std::move(phase);
+    maker_.SetPhaseReport(std::move(phase));
   }
 
   /// Thread-safe: the bench stops at its next sample; a lockstep wait ends at once.
@@ -77,7 +77,6 @@ class DdsBenchLink final : public BenchLink {
   bool FromDriver(const SourceId& source, const char* what);
 
   std::function<void()> turned_ = [] {};
-  std::function<void(const char*)> phase_ = [](const char*) {};
   std::string bench_id_;
   int control_count_;
   double lockstep_timeout_s_;

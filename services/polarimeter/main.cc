@@ -177,7 +177,7 @@ class PolarimeterService final : public Service {
           TraceHeaderLines(bench_.scenario(), bench_.chain(), bench_.target(), 1,
                            "dpc-polarimeter " + std::string(options.bench.lockstep ? "lockstep" : "real time")));
     }
-    link_.SetLoopReports([this] { Turned(); }, [this](const char* phase) { GuardPhase(phase); });
+    link_.SetLoopReports([this] { Turned(); }, [this](const char* phase) { return GuardPhase(phase); });
     for (const std::string& line : bus::DescribeShmCleanup(link_.participant().shm_cleanup())) {
       spdlog::info("{}", line);
     }

@@ -170,6 +170,11 @@ TEST_F(DpcRecordTest, BadCommandLinesExit2NamingTheProblemAndCreateNoFile) {
     EXPECT_EQ(r.exit_code, 2) << limit << ": " << r.err;
     EXPECT_NE(r.err.find("--stuck-exit-s"), std::string::npos) << r.err;
   }
+  for (const char* mib : {"-1", "1025", "4.5"}) {
+    r = Dpc({"record", "-o", out, "--udp-receive-buffer-mib", mib, "--domain", "90"});
+    EXPECT_EQ(r.exit_code, 2) << mib << ": " << r.err;
+    EXPECT_NE(r.err.find("--udp-receive-buffer-mib"), std::string::npos) << r.err;
+  }
   EXPECT_FALSE(fs::exists(out));
   r = Dpc({"record", "-o", (dir_ / "no-such-dir" / "r.mcap").string(), "--duration-s", "1", "--domain", "90"});
   EXPECT_EQ(r.exit_code, 1) << r.err;
@@ -188,6 +193,8 @@ TEST_F(DpcRecordTest, RecordingKeepsEverySampleOnceAsItArrivedWithTheIdlAsSchema
   ASSERT_TRUE(code.has_value()) << recorder.err();
   ASSERT_EQ(*code, 0) << recorder.err();
   EXPECT_NE(recorder.err().find("samples "), std::string::npos) << recorder.err();
+  // What it asked of the kernel for its UDP sockets (and, on a kernel that grants less, how much).
+  EXPECT_NE(recorder.err().find("dpc record: UDP receive buffer: 4.0 MiB"), std::string::npos) << recorder.err();
 
   const Recording r = ReadRecording(file);
   ASSERT_TRUE(r.read.complete) << r.read.problem;

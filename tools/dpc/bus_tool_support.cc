@@ -33,7 +33,8 @@ void AddBusToolOptions(CLI::App& command, BusToolOptions* options, const char* b
 }
 
 bus::BusOptions BusToolOptions::Participant(const std::string& name, const std::string& default_identity) const {
-  return bus::BusOptions{domain_id, name, {security_dir, identity.empty() ? default_identity : identity}};
+  return bus::BusOptions{domain_id, name, {security_dir, identity.empty() ? default_identity : identity},
+                         udp_receive_buffer_bytes};
 }
 
 ObserverParticipant::ObserverParticipant(const BusToolOptions& options, const std::string& command,

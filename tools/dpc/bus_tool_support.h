@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <csignal>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
@@ -23,6 +24,7 @@ struct BusToolOptions {
   std::string bench_id = "bench1";
   std::string security_dir;  ///< DDS Security credentials; empty: off
   std::string identity;      ///< empty: the command's role (observer; operator for `dpc target`)
+  uint32_t udp_receive_buffer_bytes = 0;  ///< bus::BusOptions's; 0: the profile's
 
   /// The participant's options: this domain, `name`, the credentials of `identity` (or of
   /// `default_identity`).
@@ -52,6 +54,9 @@ class ObserverParticipant {
   /// `make_endpoints` on the new one; true then. False (nothing changed) otherwise, and
   /// without DDS Security.
   bool Heal(const std::function<void()>& delete_endpoints, const std::function<void()>& make_endpoints);
+
+  /// What Heal tells the command's loop guard while it runs (bus::ParticipantMaker::PhaseReport).
+  void SetPhaseReport(bus::ParticipantMaker::PhaseReport report) { maker_.SetPhaseReport(std::move(report)); }
 
   /// How many times Heal made the participant again.
   uint64_t reloads() const { return reloads_; }

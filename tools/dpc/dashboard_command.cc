@@ -288,6 +288,7 @@ cli::ExitCode RunDashboardCommand(const DashboardOptions& o) {
     const auto now_s = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
     DashboardModel model(DashboardModelOptions{o.lock_threshold_deg});
     ObserverParticipant participant(o.bus, "dpc dashboard", "operator");
+    participant.SetPhaseReport([&guard](const char* phase) { return guard->Phase(phase); });
     const std::string& bench = o.bus.bench_id;
 
     // The writer before `requests` and the server: it goes after them (reverse order), so no
@@ -380,9 +381,7 @@ cli::ExitCode RunDashboardCommand(const DashboardOptions& o) {
         std::this_thread::sleep_for(std::min<Clock::duration>(next - Clock::now(), std::chrono::milliseconds(20)));
       }
       if (StopSignals::requested()) break;
-      guard->Phase("a reload of its DDS participant");
       participant.Heal(delete_endpoints, make_endpoints);
-      guard->Phase("its pushes");
       next += period;
       if (next < Clock::now()) next = Clock::now() + period;  // fell behind: do not burst
       json snapshot;

@@ -97,6 +97,11 @@ CLI::App* AddRecordCommand(CLI::App& app, RecordOptions* o) {
                      "Write the chunk being filled at least this often: what a crash can lose at most")
       ->check(CLI::Range(0.05, 3600.0))
       ->capture_default_str();
+  record->add_option("--udp-receive-buffer-mib", o->udp_receive_buffer_mib,
+                     "The UDP receive buffer to ask for: what arrives while the recorder is not scheduled waits "
+                     "there instead of being lost (the kernel caps it at net.core.rmem_max; 0: the profile's)")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
   AddStuckExitOption(*record, &o->stuck_exit_s, ": the file keeps what was flushed, and a supervisor can start a new one");
   return record;
 }
@@ -149,7 +154,10 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
                            {"start_time_ns", std::to_string(WallNs())}}});
     if (!scenario_text.empty()) writer.WriteMetadata({"scenario", {{"path", o.scenario_path}, {"text", scenario_text}}});
 
-    ObserverParticipant participant(o.bus, "dpc record", "observer");
+    BusToolOptions bus_options = o.bus;
+    bus_options.udp_receive_buffer_bytes = static_cast<uint32_t>(o.udp_receive_buffer_mib) << 20;
+    ObserverParticipant participant(bus_options, "dpc record", "observer");
+    participant.SetPhaseReport([&guard](const char* phase) { return guard.Phase(phase); });
     struct Channel {
       uint16_t id = 0;
       uint32_t sequence = 0;  ///< of the messages kept
@@ -182,6 +190,11 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
     fmt::print(stderr, "dpc record: {} topic{} of bench {} (domain {}) → {}{}\n", channels.size(),
                channels.size() == 1 ? "" : "s", o.bus.bench_id, o.bus.domain_id, o.output_path,
                o.duration_s > 0 ? fmt::format(" for {:g} s", o.duration_s) : ", Ctrl-C to stop");
+    if (bus_options.udp_receive_buffer_bytes > 0) {
+      fmt::print(stderr, "dpc record: {}\n",
+                 bus::UdpReceiveBufferNote(bus_options.udp_receive_buffer_bytes,
+                                           bus::KernelUdpReceiveBufferLimitBytes()));
+    }
 
     SampleAccounting samples;
     std::string last_device;  // the device description's payload last kept as metadata
@@ -222,7 +235,6 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
       guard.Turn();
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       drain();
-      guard.Phase("a reload of its DDS participant");
       const bool healed = participant.Heal(
           [&] {
             drain();  // what the old readers hold is kept
@@ -230,7 +242,6 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
             for (Channel& channel : channels) channel.reader.reset();
           },
           make_readers);
-      guard.Phase("its drains");
       if (healed) {
         // The gap it leaves shows in the samples' accounting; the file says when it was.
         writer.WriteMetadata({"participant_reload",

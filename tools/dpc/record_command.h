@@ -26,6 +26,9 @@ struct RecordOptions {
   std::string scenario_path;        ///< kept as metadata "scenario" (validated first)
   double flush_interval_s = 1.0;    ///< the chunk being filled is written at least this often
   double stuck_exit_s = 10.0;       ///< the loop guard's turn limit (cli::LoopGuard); 0: off
+  /// The UDP receive buffer asked for (bus::BusOptions::udp_receive_buffer_bytes), in MiB; 0:
+  /// the profile's. What arrives while the recorder is not scheduled waits there.
+  int udp_receive_buffer_mib = 4;
 };
 
 CLI::App* AddRecordCommand(CLI::App& app, RecordOptions* options);

@@ -2,14 +2,18 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastrtps/attributes/LibrarySettingsAttributes.h>
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/UDPv6TransportDescriptor.h>
 #include <fmt/format.h>
 
 #include "dpc/bench/clock.h"
@@ -259,6 +263,48 @@ std::function<void(const PeerEvent&)> DescribedPeerEvents(std::function<void(boo
   };
 }
 
+namespace {
+
+/// The profile's UDP transports with at least `bytes` of receive buffer (copies: the profile's
+/// descriptors are shared by every participant made from it).
+void RaiseUdpReceiveBuffers(fdds::DomainParticipantQos& qos, uint32_t bytes) {
+  namespace rtps = eprosima::fastdds::rtps;
+  for (auto& transport : qos.transport().user_transports) {
+    const auto raised = [&](auto typed) -> std::shared_ptr<rtps::TransportDescriptorInterface> {
+      if (typed == nullptr || typed->receiveBufferSize >= bytes) return nullptr;
+      auto copy = std::make_shared<std::remove_cv_t<typename decltype(typed)::element_type>>(*typed);
+      copy->receiveBufferSize = bytes;
+      return copy;
+    };
+    auto copy = raised(std::dynamic_pointer_cast<rtps::UDPv4TransportDescriptor>(transport));
+    if (copy == nullptr) copy = raised(std::dynamic_pointer_cast<rtps::UDPv6TransportDescriptor>(transport));
+    if (copy != nullptr) transport = copy;
+  }
+}
+
+std::string Mebibytes(uint64_t bytes) { return fmt::format("{:.1f} MiB", static_cast<double>(bytes) / 1048576.0); }
+
+}  // namespace
+
+uint64_t KernelUdpReceiveBufferLimitBytes() {
+  std::ifstream file("/proc/sys/net/core/rmem_max");
+  uint64_t bytes = 0;
+  if (!(file >> bytes)) return 0;
+  return bytes;
+}
+
+std::string UdpReceiveBufferNote(uint64_t requested_bytes, uint64_t kernel_limit_bytes) {
+  if (kernel_limit_bytes == 0) {
+    return fmt::format("UDP receive buffer: {} asked (the kernel's limit, net.core.rmem_max, could not be read)",
+                       Mebibytes(requested_bytes));
+  }
+  if (kernel_limit_bytes >= requested_bytes) return fmt::format("UDP receive buffer: {}", Mebibytes(requested_bytes));
+  return fmt::format(
+      "UDP receive buffer: {} asked, but the kernel grants {} (net.core.rmem_max): at high rates messages may be "
+      "lost while this process is not scheduled; to raise it: sysctl -w net.core.rmem_max={}",
+      Mebibytes(requested_bytes), Mebibytes(kernel_limit_bytes), requested_bytes);
+}
+
 std::string ResolveProfilesFile() {
   if (const char* file = std::getenv(kProfilesEnvironmentVariable); file != nullptr && *file) {
     if (!std::filesystem::is_regular_file(file)) {
@@ -300,6 +346,7 @@ BusParticipant::BusParticipant(const BusOptions& options, std::function<void(con
     throw BusError(fmt::format("{}: no participant profile \"{}\"", profiles_file_, kParticipantProfile));
   }
   qos.name(options.participant_name);
+  if (options.udp_receive_buffer_bytes > 0) RaiseUdpReceiveBuffers(qos, options.udp_receive_buffer_bytes);
   for (const auto& [name, value] : SecurityProperties(options.security)) {
     qos.properties().properties().emplace_back(name, value);
   }

@@ -92,7 +92,21 @@ struct BusOptions {
   int domain_id = 0;
   std::string participant_name = "dpc";
   SecurityOptions security;
+  /// At least this receive buffer (SO_RCVBUF) on the participant's UDP sockets, in bytes; 0:
+  /// the profile's (or the kernel's default). What a receiver keeps while its threads are not
+  /// scheduled: a recorder asks for more than a service (UdpReceiveBufferNote). The kernel
+  /// caps it at net.core.rmem_max without saying so.
+  uint32_t udp_receive_buffer_bytes = 0;
 };
+
+/// The largest UDP receive buffer the kernel grants an unprivileged socket
+/// (/proc/sys/net/core/rmem_max), in bytes; 0 if it cannot be read.
+uint64_t KernelUdpReceiveBufferLimitBytes();
+
+/// What a command that asked for `requested_bytes` of UDP receive buffer should tell its user,
+/// given the kernel's limit (KernelUdpReceiveBufferLimitBytes): the buffer it gets, and if the
+/// kernel caps it below the request, by how much and how to raise the limit.
+std::string UdpReceiveBufferNote(uint64_t requested_bytes, uint64_t kernel_limit_bytes);
 
 /// Whether a reader requests its topic's DEADLINE (the profile's period) and counts the misses.
 /// Fast DDS re-arms a deadline timer for every sample a reader receives (and every one a writer

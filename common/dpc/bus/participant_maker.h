@@ -64,6 +64,13 @@ class ParticipantMaker {
                    HandshakeWatchdog::Starving starving = HandshakeWatchdog::Starving::kService)
       : options_(std::move(options)), on_peer_(std::move(on_peer)), log_(std::move(log)), watchdog_(starving) {}
 
+  /// What a loop guard (cli::LoopGuard::Phase) is told while Reload runs: the phase to name
+  /// (kReloadPhase) in, what it returned back. Reload makes and deletes participants and
+  /// endpoints, the calls of Fast DDS 2.9 that were seen to deadlock (ARCHITECTURE.md).
+  using PhaseReport = std::function<const char*(const char*)>;
+  static constexpr const char* kReloadPhase = "a reload of its DDS participant";
+  void SetPhaseReport(PhaseReport report) { phase_report_ = std::move(report); }
+
   /// At start: throws as BusParticipant does (the service cannot start).
   std::unique_ptr<BusParticipant> Make() const { return std::make_unique<BusParticipant>(options_, on_peer_); }
 
@@ -82,6 +89,7 @@ class ParticipantMaker {
   /// replaced by the new one, `make_endpoints` (on it). True when the endpoints moved.
   bool Reload(std::unique_ptr<BusParticipant>* participant, const std::function<void()>& delete_endpoints,
               const std::function<void()>& make_endpoints, const std::string& cause) {
+    const PhaseScope phase(phase_report_);
     const int64_t now_ns = MonotonicNs();
     if (!cause.empty()) {
       const std::string credentials =
@@ -183,7 +191,24 @@ class ParticipantMaker {
   }
 
  private:
+  /// kReloadPhase while alive, then the phase before it.
+  class PhaseScope {
+   public:
+    explicit PhaseScope(const PhaseReport& report)
+        : report_(report), before_(report ? report(kReloadPhase) : nullptr) {}
+    ~PhaseScope() {
+      if (report_ && before_ != nullptr) report_(before_);
+    }
+    PhaseScope(const PhaseScope&) = delete;
+    PhaseScope& operator=(const PhaseScope&) = delete;
+
+   private:
+    const PhaseReport& report_;
+    const char* before_;
+  };
+
   BusOptions options_;
+  PhaseReport phase_report_;
   std::function<void(const PeerEvent&)> on_peer_;
   Log log_;
   HandshakeWatchdog watchdog_;

@@ -79,8 +79,9 @@ class LoopGuard {
 
   /// One turn of the loop (any thread; a relaxed increment).
   void Turn() noexcept { turns_.fetch_add(1, std::memory_order_relaxed); }
-  /// What the loop does now, for the message: a string literal (it is kept by pointer).
-  void Phase(const char* literal) noexcept { phase_.store(literal, std::memory_order_relaxed); }
+  /// What the loop does now, for the message: a string literal (it is kept by pointer). Returns
+  /// the phase it replaces.
+  const char* Phase(const char* literal) noexcept { return phase_.exchange(literal, std::memory_order_relaxed); }
   /// A stop was asked, or run() ended: the process must end within the stop grace.
   void Stopping() noexcept { stopping_.store(true, std::memory_order_relaxed); }
 

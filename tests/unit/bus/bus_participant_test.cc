@@ -3,6 +3,9 @@
 // domain of 64–70 (this file's share of the tests' range 60–79), so nothing leaves the host and
 // no other test's traffic meets these.
 #include "dpc/bus/bus_participant.h"
+#include "dpc/bus/participant_maker.h"
+
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -15,6 +18,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 #include <thread>
 #include <algorithm>
@@ -132,6 +136,54 @@ TEST_F(BusParticipantTest, AParticipantOnTheLoopbackProfileUsesNoBuiltinTranspor
   // Only the profile's UDPv4 transport on 127.0.0.1: nothing binds another interface.
   EXPECT_FALSE(qos.transport().use_builtin_transports);
   EXPECT_EQ(qos.transport().user_transports.size(), 1u);
+}
+
+TEST_F(BusParticipantTest, AnAskedUdpReceiveBufferRaisesThisParticipantsOnlyAndKeepsTheWhitelist) {
+  namespace rtps = eprosima::fastdds::rtps;
+  const auto udp_of = [](const BusParticipant& participant) {
+    const auto qos = participant.raw()->get_qos();
+    EXPECT_EQ(qos.transport().user_transports.size(), 1u);
+    return std::dynamic_pointer_cast<rtps::UDPv4TransportDescriptor>(qos.transport().user_transports.at(0));
+  };
+  BusOptions options = Options(kParticipantDomain, "dpc_bus_test_recorder");
+  options.udp_receive_buffer_bytes = 8u << 20;
+  BusParticipant recorder(options);
+  const auto raised = udp_of(recorder);
+  ASSERT_NE(raised, nullptr);
+  EXPECT_EQ(raised->receiveBufferSize, 8u << 20);
+  EXPECT_EQ(raised->interfaceWhiteList, std::vector<std::string>{"127.0.0.1"});
+  // The profile's descriptor is shared: a participant made after it keeps the profile's size.
+  BusParticipant service(Options(kParticipantDomain, "dpc_bus_test_service"));
+  const auto kept = udp_of(service);
+  ASSERT_NE(kept, nullptr);
+  EXPECT_EQ(kept->receiveBufferSize, 0u);
+}
+
+TEST_F(BusParticipantTest, AReloadNamesItselfToTheLoopGuardWhileItRunsAndGivesThePhaseBack) {
+  ParticipantMaker maker(Options(kParticipantDomain, "dpc_bus_test_reload"), {}, [](bool, const std::string&) {});
+  const char* phase = "its ticks";
+  maker.SetPhaseReport([&phase](const char* now) { return std::exchange(phase, now); });
+  std::unique_ptr<BusParticipant> participant = maker.Make();
+  const BusParticipant* before = participant.get();
+  std::vector<std::string> seen;
+  EXPECT_TRUE(maker.Reload(
+      &participant, [&] { seen.emplace_back(phase); }, [&] { seen.emplace_back(phase); }, "SIGHUP"));
+  EXPECT_NE(participant.get(), before) << "an open reload moves the endpoints at once";
+  EXPECT_EQ(seen, (std::vector<std::string>{ParticipantMaker::kReloadPhase, ParticipantMaker::kReloadPhase}));
+  EXPECT_STREQ(phase, "its ticks");
+  // A loop with no guard (the report is empty) reloads the same way.
+  ParticipantMaker unguarded(Options(kParticipantDomain, "dpc_bus_test_reload"), {}, [](bool, const std::string&) {});
+  EXPECT_TRUE(unguarded.Reload(&participant, [] {}, [] {}, "SIGHUP"));
+}
+
+TEST(UdpReceiveBufferNoteTest, SaysWhatTheKernelGrantsAndHowToRaiseIt) {
+  EXPECT_EQ(UdpReceiveBufferNote(4u << 20, 8u << 20), "UDP receive buffer: 4.0 MiB");
+  EXPECT_EQ(UdpReceiveBufferNote(4u << 20, 4u << 20), "UDP receive buffer: 4.0 MiB");
+  const std::string capped = UdpReceiveBufferNote(4u << 20, 212992);
+  EXPECT_NE(capped.find("4.0 MiB asked, but the kernel grants 0.2 MiB (net.core.rmem_max)"), std::string::npos)
+      << capped;
+  EXPECT_NE(capped.find("sysctl -w net.core.rmem_max=4194304"), std::string::npos) << capped;
+  EXPECT_NE(UdpReceiveBufferNote(1u << 20, 0).find("could not be read"), std::string::npos);
 }
 
 TEST_F(BusParticipantTest, AWriterAndAReaderInTwoParticipantsExchangeASample) {
