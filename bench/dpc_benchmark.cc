@@ -523,9 +523,10 @@ void PrintSummary(const std::map<std::string, CollectingReporter::Entry>& e) {
     const auto* x = find(fmt::format("ControlLoop/gp/{}/0", stages));
     const auto* general = find(fmt::format("ControlLoop/gp-general/{}/5", stages));
     if (!x) continue;
-    fmt::print("  full control update, gp, {} stages: {:6.1f} ns ({:.1f} ns general)   "
+    fmt::print("  full control update, gp, {} stages: {:6.1f} ns{}   "
                "<= {:.0f} ns{}: {}\n",
-               stages, x->ns_per_iteration, general ? general->ns_per_iteration : NAN, goal,
+               stages, x->ns_per_iteration,
+               general ? fmt::format(" ({:.1f} ns general)", general->ns_per_iteration) : std::string(), goal,
                must > goal ? fmt::format(" (must <= {:.0f})", must) : "",
                verdict(x->ns_per_iteration, goal, must, true));
   }
@@ -533,8 +534,8 @@ void PrintSummary(const std::map<std::string, CollectingReporter::Entry>& e) {
     const auto* sim = find(fmt::format("Simulator/gp/{}/0", stages));
     const auto* general = find(fmt::format("Simulator/gp-general-loop/{}/2", stages));
     if (!sim) continue;
-    fmt::print("  one trajectory, {} stages:          {:6.2f} M samples/s ({:.2f} M general loop){}\n",
-               stages, sim->samples_per_s / 1e6, general ? general->samples_per_s / 1e6 : NAN,
+    fmt::print("  one trajectory, {} stages:          {:6.2f} M samples/s{}{}\n", stages, sim->samples_per_s / 1e6,
+               general ? fmt::format(" ({:.2f} M general loop)", general->samples_per_s / 1e6) : std::string(),
                stages == 4 ? fmt::format("   >= 25 M (must >= 20 M): {}",
                                          verdict(sim->samples_per_s, 25e6, 20e6, false))
                            : "");
@@ -560,10 +561,11 @@ void PrintSummary(const std::map<std::string, CollectingReporter::Entry>& e) {
     for (const auto& [isa, arg, goal] : {std::tuple{"avx2", 1, 60e6}, std::tuple{"avx512", 2, 100e6}}) {
       const auto* batch = find(fmt::format("Simulator/batch-{}/{}/{}", isa, stages, arg));
       if (!batch || batch->samples_per_s <= 0.0) continue;
-      fmt::print("  batched ({:<6}) one core, {} stages: {:6.2f} M samples/s ({:.2f}x one trajectory)"
-                 "{}\n",
-                 isa, stages, batch->samples_per_s / 1e6,
-                 sim ? batch->samples_per_s / sim->samples_per_s : NAN,
+      fmt::print("  batched ({:<6}) one core, {} stages: {:6.2f} M samples/s{}{}\n", isa, stages,
+                 batch->samples_per_s / 1e6,
+                 sim && sim->samples_per_s > 0.0
+                     ? fmt::format(" ({:.2f}x one trajectory)", batch->samples_per_s / sim->samples_per_s)
+                     : std::string(" (one trajectory not run: --benchmark_filter)"),
                  stages == 4 ? fmt::format("   >= {:.0f} M: {}", goal / 1e6,
                                            verdict(batch->samples_per_s, goal, goal, false))
                              : "");
