@@ -244,6 +244,10 @@ TEST_F(DpcRecordTest, RecordingKeepsEverySampleOnceAsItArrivedWithTheIdlAsSchema
   EXPECT_EQ(recorder_meta->values.at("domain"), "90");
   EXPECT_FALSE(recorder_meta->values.at("host").empty());
   EXPECT_NE(recorder_meta->values.at("version").find("dpc"), std::string::npos);
+  // The UDP receive buffer the kernel granted: the 4 MiB asked, or its cap (net.core.rmem_max).
+  const uint64_t granted = std::stoull(recorder_meta->values.at("udp_receive_buffer_bytes"));
+  EXPECT_GT(granted, 0u);
+  EXPECT_LE(granted, 4u << 20);
   const auto* scenario = FindMetadata(r, "scenario");
   ASSERT_NE(scenario, nullptr);
   EXPECT_NE(scenario->values.at("text").find("stages"), std::string::npos);

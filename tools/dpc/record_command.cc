@@ -146,16 +146,26 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
                                               record::ParseMcapCompression(o.compression), 1 << 20});
     char host[256] = {};
     gethostname(host, sizeof host - 1);
-    writer.WriteMetadata({"recorder",
-                          {{"version", cli::VersionText("dpc")},
-                           {"host", host},
-                           {"domain", std::to_string(o.bus.domain_id)},
-                           {"bench_id", o.bus.bench_id},
-                           {"start_time_ns", std::to_string(WallNs())}}});
-    if (!scenario_text.empty()) writer.WriteMetadata({"scenario", {{"path", o.scenario_path}, {"text", scenario_text}}});
-
     BusToolOptions bus_options = o.bus;
     bus_options.udp_receive_buffer_bytes = static_cast<uint32_t>(o.udp_receive_buffer_mib) << 20;
+    const uint64_t kernel_limit_bytes = bus::KernelUdpReceiveBufferLimitBytes();
+    record::McapMetadata recorder{"recorder",
+                                  {{"version", cli::VersionText("dpc")},
+                                   {"host", host},
+                                   {"domain", std::to_string(o.bus.domain_id)},
+                                   {"bench_id", o.bus.bench_id},
+                                   {"start_time_ns", std::to_string(WallNs())}}};
+    if (bus_options.udp_receive_buffer_bytes > 0) {
+      // What the kernel grants (it caps the request silently): a reader of the file can tell
+      // whether a loss may have been the recorder's.
+      recorder.values["udp_receive_buffer_bytes"] =
+          std::to_string(kernel_limit_bytes > 0 ? std::min<uint64_t>(bus_options.udp_receive_buffer_bytes,
+                                                                    kernel_limit_bytes)
+                                                : bus_options.udp_receive_buffer_bytes);
+    }
+    writer.WriteMetadata(recorder);
+    if (!scenario_text.empty()) writer.WriteMetadata({"scenario", {{"path", o.scenario_path}, {"text", scenario_text}}});
+
     ObserverParticipant participant(bus_options, "dpc record", "observer");
     participant.SetPhaseReport([&guard](const char* phase) { return guard.Phase(phase); });
     struct Channel {
@@ -192,8 +202,7 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
                o.duration_s > 0 ? fmt::format(" for {:g} s", o.duration_s) : ", Ctrl-C to stop");
     if (bus_options.udp_receive_buffer_bytes > 0) {
       fmt::print(stderr, "dpc record: {}\n",
-                 bus::UdpReceiveBufferNote(bus_options.udp_receive_buffer_bytes,
-                                           bus::KernelUdpReceiveBufferLimitBytes()));
+                 bus::UdpReceiveBufferNote(bus_options.udp_receive_buffer_bytes, kernel_limit_bytes));
     }
 
     SampleAccounting samples;
