@@ -159,9 +159,7 @@ cli::ExitCode RunRecordCommand(const RecordOptions& o) {
       // What the kernel grants (it caps the request silently): a reader of the file can tell
       // whether a loss may have been the recorder's.
       recorder.values["udp_receive_buffer_bytes"] =
-          std::to_string(kernel_limit_bytes > 0 ? std::min<uint64_t>(bus_options.udp_receive_buffer_bytes,
-                                                                    kernel_limit_bytes)
-                                                : bus_options.udp_receive_buffer_bytes);
+          std::to_string(bus::GrantedUdpReceiveBufferBytes(bus_options.udp_receive_buffer_bytes, kernel_limit_bytes));
     }
     writer.WriteMetadata(recorder);
     if (!scenario_text.empty()) writer.WriteMetadata({"scenario", {{"path", o.scenario_path}, {"text", scenario_text}}});

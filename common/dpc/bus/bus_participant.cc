@@ -293,16 +293,21 @@ uint64_t KernelUdpReceiveBufferLimitBytes() {
   return bytes;
 }
 
+uint64_t GrantedUdpReceiveBufferBytes(uint64_t requested_bytes, uint64_t kernel_limit_bytes) {
+  return kernel_limit_bytes > 0 ? std::min(requested_bytes, kernel_limit_bytes) : requested_bytes;
+}
+
 std::string UdpReceiveBufferNote(uint64_t requested_bytes, uint64_t kernel_limit_bytes) {
   if (kernel_limit_bytes == 0) {
     return fmt::format("UDP receive buffer: {} asked (the kernel's limit, net.core.rmem_max, could not be read)",
                        Mebibytes(requested_bytes));
   }
-  if (kernel_limit_bytes >= requested_bytes) return fmt::format("UDP receive buffer: {}", Mebibytes(requested_bytes));
+  const uint64_t granted_bytes = GrantedUdpReceiveBufferBytes(requested_bytes, kernel_limit_bytes);
+  if (granted_bytes == requested_bytes) return fmt::format("UDP receive buffer: {}", Mebibytes(requested_bytes));
   return fmt::format(
       "UDP receive buffer: {} asked, but the kernel grants {} (net.core.rmem_max): at high rates messages may be "
       "lost while this process is not scheduled; to raise it: sysctl -w net.core.rmem_max={}",
-      Mebibytes(requested_bytes), Mebibytes(kernel_limit_bytes), requested_bytes);
+      Mebibytes(requested_bytes), Mebibytes(granted_bytes), requested_bytes);
 }
 
 std::string ResolveProfilesFile() {

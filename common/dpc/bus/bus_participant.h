@@ -103,6 +103,10 @@ struct BusOptions {
 /// (/proc/sys/net/core/rmem_max), in bytes; 0 if it cannot be read.
 uint64_t KernelUdpReceiveBufferLimitBytes();
 
+/// The UDP receive buffer a socket that asks for `requested_bytes` gets: at most the kernel's
+/// limit (KernelUdpReceiveBufferLimitBytes; 0, unknown: the request).
+uint64_t GrantedUdpReceiveBufferBytes(uint64_t requested_bytes, uint64_t kernel_limit_bytes);
+
 /// What a command that asked for `requested_bytes` of UDP receive buffer should tell its user,
 /// given the kernel's limit (KernelUdpReceiveBufferLimitBytes): the buffer it gets, and if the
 /// kernel caps it below the request, by how much and how to raise the limit.

@@ -184,6 +184,9 @@ TEST(UdpReceiveBufferNoteTest, SaysWhatTheKernelGrantsAndHowToRaiseIt) {
       << capped;
   EXPECT_NE(capped.find("sysctl -w net.core.rmem_max=4194304"), std::string::npos) << capped;
   EXPECT_NE(UdpReceiveBufferNote(1u << 20, 0).find("could not be read"), std::string::npos);
+  EXPECT_EQ(GrantedUdpReceiveBufferBytes(4u << 20, 212992), 212992u);
+  EXPECT_EQ(GrantedUdpReceiveBufferBytes(4u << 20, 8u << 20), 4u << 20);
+  EXPECT_EQ(GrantedUdpReceiveBufferBytes(4u << 20, 0), 4u << 20);
 }
 
 TEST_F(BusParticipantTest, AWriterAndAReaderInTwoParticipantsExchangeASample) {
