@@ -68,7 +68,7 @@ class SingularValues {
   /// only when this is true.
   bool MayBeBelow(double bound) const {
     switch (kind_) {
-      case Kind::kGram2: return d_ < bound * (a_ + b_);
+      case Kind::kGram2: return GramMayBeBelow(a_, b_, d_, bound);
       case Kind::kGram1: return a_ < bound;
       case Kind::kExact: return b_ * b_ < bound;
     }
@@ -77,16 +77,26 @@ class SingularValues {
   /// Whether σ_min < ratio·σ_max (0 < ratio ≤ 1), decided exactly without roots: with
   /// q = ratio², λ2/λ1 < q ⇔ det/tr² < q/(1 + q)² (x/(1 + x)² increases on [0, 1]).
   bool IsBelowRatio(double ratio) const {
-    const double q = ratio * ratio;
     switch (kind_) {
-      case Kind::kGram2: {
-        const double trace = a_ + b_;
-        return d_ * (1.0 + q) * (1.0 + q) < q * trace * trace;
-      }
+      case Kind::kGram2: return GramIsBelowRatio(a_, b_, d_, ratio);
       case Kind::kGram1: return false;  // one singular value
       case Kind::kExact: return b_ < ratio * a_;
     }
     return false;
+  }
+
+  /// MayBeBelow and IsBelowRatio of a 2×2 Gram matrix (g11, g22, det G) with the methods'
+  /// operations, on any arithmetic type T: a double, or a vector of them lane by lane (a batch's
+  /// lanes at once).
+  template <typename T, typename Bound>
+  static auto GramMayBeBelow(T g11, T g22, T det, Bound bound) -> decltype(det < bound * g11) {
+    return det < bound * (g11 + g22);
+  }
+  template <typename T>
+  static auto GramIsBelowRatio(T g11, T g22, T det, double ratio) -> decltype(det < g11) {
+    const double q = ratio * ratio;
+    const T trace = g11 + g22;
+    return det * (1.0 + q) * (1.0 + q) < q * trace * trace;
   }
 
  private:

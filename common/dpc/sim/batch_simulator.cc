@@ -1,7 +1,9 @@
 #include "dpc/sim/batch_simulator.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <stdexcept>
 #include <string_view>
@@ -179,6 +181,83 @@ struct BlockBuffers {
   alignas(64) uint8_t flags[kSize];
 };
 
+/// The updates' statistics of a batch's lanes (UpdateTally), tallied sample by sample with one
+/// vector operation for four lanes (each lane's in its sample order, as RunStatistics::AddUpdate
+/// counts them); the near-singular lanes' singular values, and the candidates for a new
+/// smallest σ_min, lane by lane.
+class LaneUpdateTallies {
+ public:
+  static constexpr int kWidth = 4;  ///< lanes per vector (AVX2, the baseline build's)
+  using V = double __attribute__((vector_size(8 * kWidth)));
+  using M = int64_t __attribute__((vector_size(8 * kWidth)));
+
+  /// The block's samples [first, count) of the lanes below `real`; lane_of(l) gives lane l
+  /// (its rank and singular values of near-singular samples).
+  template <typename LaneOf>
+  void Add(const BlockBuffers& buffers, int first, int count, LaneOf&& lane_of, int real) {
+    updates_ += count - first;
+    for (int h = 0; h * kWidth < real; ++h) {
+      Half& half = halves_[h];
+      for (int i = first; i < count; ++i) {
+        const size_t at = static_cast<size_t>(i) * kMaxBatchLanes + static_cast<size_t>(h) * kWidth;
+        M flags;
+        for (int l = 0; l < kWidth; ++l) flags[l] = buffers.flags[at + static_cast<size_t>(l)];
+        const M near = (flags & int64_t{kBatchNearSingular}) != 0;
+        half.nullspace_active -= (flags & int64_t{kBatchNullspaceActive}) != 0;  // a set mask is −1
+        half.failed -= (flags & int64_t{kBatchApplied}) == 0;
+        V g11, g22, det;
+        std::memcpy(&g11, buffers.gram[0] + at, sizeof(V));
+        std::memcpy(&g22, buffers.gram[1] + at, sizeof(V));
+        std::memcpy(&det, buffers.gram[3] + at, sizeof(V));
+        half.near_singular -=
+            SingularValues::GramIsBelowRatio(g11, g22, det, UpdateTally::kNearSingularRatio) & ~near;
+        const M candidate =
+            SingularValues::GramMayBeBelow(g11, g22, det, half.min_sigma_squared) & ~near;
+        const M rare = candidate | near;
+        if ((rare[0] | rare[1] | rare[2] | rare[3]) == 0) continue;
+        for (int l = 0; l < kWidth && h * kWidth + l < real; ++l) {
+          if (candidate[l] != 0) {
+            const double squared = SingularValues::FromGram(g11[l], g22[l],
+                                                            buffers.gram[2][at + static_cast<size_t>(l)],
+                                                            det[l]).min_squared();
+            half.min_sigma_squared[l] = std::min(half.min_sigma_squared[l], squared);
+          } else if (near[l] != 0) {
+            const auto& lane = lane_of(h * kWidth + l);
+            UpdateTally tally;
+            tally.min_sigma_squared = half.min_sigma_squared[l];
+            tally.AddSingularValues(lane.singular_values[i]);
+            half.min_sigma_squared[l] = tally.min_sigma_squared;
+            half.near_singular[l] += tally.near_singular;
+            half.rank_deficient[l] += (flags[l] & int64_t{kBatchApplied}) != 0 && lane.rank[i] < 2;
+          }
+        }
+      }
+    }
+  }
+
+  /// Lane l's tally.
+  UpdateTally Lane(int l) const {
+    const Half& half = halves_[l / kWidth];
+    const int in = l % kWidth;
+    UpdateTally tally;
+    tally.updates = updates_;
+    tally.nullspace_active = half.nullspace_active[in];
+    tally.failed = half.failed[in];
+    tally.rank_deficient = half.rank_deficient[in];
+    tally.near_singular = half.near_singular[in];
+    tally.min_sigma_squared = half.min_sigma_squared[in];
+    return tally;
+  }
+
+ private:
+  struct Half {
+    M nullspace_active{}, failed{}, rank_deficient{}, near_singular{};
+    V min_sigma_squared = V{} + INFINITY;
+  };
+  int64_t updates_ = 0;
+  Half halves_[kMaxBatchLanes / kWidth];
+};
+
 template <typename Axes>
 std::vector<SimulationResult> RunBatchFor(std::span<const ClosedLoopSimulator* const> simulators,
                                           BatchIsa isa, const Axes& axes) {
@@ -274,6 +353,7 @@ std::vector<SimulationResult> RunBatchFor(std::span<const ClosedLoopSimulator* c
   block.normals = buffers->normals;
 
   const int real = static_cast<int>(batch.lanes.size());
+  LaneUpdateTallies tallies;
   for (int64_t k = 0; k < total;) {
     const int count = static_cast<int>(std::min<int64_t>(kBatchBlock, total - k));
     if (lanes.vector_input) {
@@ -326,38 +406,37 @@ std::vector<SimulationResult> RunBatchFor(std::span<const ClosedLoopSimulator* c
     block.first_sample = k;
     block.count = count;
     kernel(lanes, block);
-    // The statistics of the true output and of the updates, each lane's in order; sample by
-    // sample across the lanes, so that each cache line of the block is read once.
-    for (int i = std::max<int>(0, static_cast<int>(std::min<int64_t>(count, activation - k)));
-         i < count; ++i) {
-      const int64_t sample = k + i;
-      for (int l = 0; l < real; ++l) {
-        Lane<Axes>& lane = *batch.lanes[static_cast<size_t>(l)];
-        RunStatistics& statistics = lane.run.statistics;
-        const size_t at = static_cast<size_t>(i) * kMaxBatchLanes + static_cast<size_t>(l);
-        const double phi[4] = {buffers->phi_applied[0][at], buffers->phi_applied[1][at],
-                               buffers->phi_applied[2][at], buffers->phi_applied[3][at]};
-        statistics.AddSample(static_cast<double>(sample) * lane.sample_period_s,
-                             StokesVector(buffers->s_out[0][at], buffers->s_out[1][at],
-                                          buffers->s_out[2][at]),
-                             phi);
-        const uint8_t flags = buffers->flags[at];
-        const bool applied = (flags & kBatchApplied) != 0;
-        const bool near_singular = (flags & kBatchNearSingular) != 0;
-        const int rank = near_singular ? lane.rank[i] : 2;
-        statistics.AddUpdate((flags & kBatchNullspaceActive) != 0, !applied,
-                             applied && rank < 2, false,
-                             near_singular ? lane.singular_values[i]
-                                           : SingularValues::FromGram(
-                                                 buffers->gram[0][at], buffers->gram[1][at],
-                                                 buffers->gram[2][at], buffers->gram[3][at]));
-      }
+    // The statistics of the true output (each lane's block at once) and of the updates.
+    const int first = std::max<int>(0, static_cast<int>(std::min<int64_t>(count, activation - k)));
+    for (int l = 0; l < real; ++l) {
+      Lane<Axes>& lane = *batch.lanes[static_cast<size_t>(l)];
+      const size_t at = static_cast<size_t>(first) * kMaxBatchLanes + static_cast<size_t>(l);
+      const double* s_out[3] = {buffers->s_out[0] + at, buffers->s_out[1] + at,
+                                buffers->s_out[2] + at};
+      lane.run.statistics.AddSamples(k + first, lane.sample_period_s, count - first, s_out,
+                                     kMaxBatchLanes);
     }
+    // Their controls, four lanes at once.
+    for (int from = 0; from < real; from += 4) {
+      RunStatistics* statistics[4] = {};
+      const int runs = std::min(4, real - from);
+      for (int j = 0; j < runs; ++j) {
+        statistics[j] = &batch.lanes[static_cast<size_t>(from + j)]->run.statistics;
+      }
+      const size_t at = static_cast<size_t>(first) * kMaxBatchLanes + static_cast<size_t>(from);
+      const double* phi[4] = {buffers->phi_applied[0] + at, buffers->phi_applied[1] + at,
+                              buffers->phi_applied[2] + at, buffers->phi_applied[3] + at};
+      RunStatistics::AddControls(statistics, runs, phi, count - first, kMaxBatchLanes);
+    }
+    tallies.Add(*buffers, first, count, [&](int l) -> Lane<Axes>& {
+      return *batch.lanes[static_cast<size_t>(l)];
+    }, real);
     k += count;
   }
 
   std::vector<SimulationResult> results;
   for (int l = 0; l < real; ++l) {
+    batch.lanes[static_cast<size_t>(l)]->run.statistics.AddUpdates(tallies.Lane(l));
     ControlVector final_phi(N);
     for (int e = 0; e < N; ++e) final_phi[e] = lanes.phi[e][l];
     results.push_back(batch.lanes[static_cast<size_t>(l)]->run.Finish(total, 0, final_phi));

@@ -99,9 +99,10 @@ class LogHistogram {
   /// rows of four, row-major) to histograms[c] for c < lanes ≤ 4 (columns beyond are ignored);
   /// the same as AddBatch on each column except for the last bits of sum(). A row's four bin
   /// indices, minima, maxima and sums are one vector operation each (e.g. the controls of one
-  /// sample, four AddBatch calls' worth of arithmetic in one).
+  /// sample, four AddBatch calls' worth of arithmetic in one). Row i starts at
+  /// values[i·row_stride] (row_stride ≥ 4: the four columns of a wider row).
   static void AddBatchLanes(LogHistogram* const* histograms, int lanes, const double* values,
-                            int count) noexcept;
+                            int count, std::ptrdiff_t row_stride = 4) noexcept;
 
   /// The estimated percentile of the samples added so far (see the header comment for the
   /// exact definition and accuracy); NaN when there are none. O(number of bins); not for the
@@ -263,7 +264,8 @@ inline void LogHistogram::AddBatch(const double* values, int count,
 }
 
 inline void LogHistogram::AddBatchLanes(LogHistogram* const* histograms, int lanes,
-                                        const double* values, int count) noexcept {
+                                        const double* values, int count,
+                                        std::ptrdiff_t row_stride) noexcept {
   using Bits = int64_t __attribute__((vector_size(32)));
   const auto splat = [](int64_t x) { return Bits{x, x, x, x}; };
   const LogHistogram& geometry = *histograms[0];
@@ -289,7 +291,7 @@ inline void LogHistogram::AddBatchLanes(LogHistogram* const* histograms, int lan
     Bits chunk_nans = splat(0);
     for (int i = 0; i < n; ++i) {
       Lanes value;
-      std::memcpy(&value, values + 4 * (start + i), sizeof value);
+      std::memcpy(&value, values + row_stride * (start + i), sizeof value);
       // Comparisons with a NaN are false: it leaves the minimum, maximum and sum alone.
       low = value < low ? value : low;
       high = value > high ? value : high;

@@ -3,6 +3,7 @@
 #include "dpc/optics/count_dispatch.h"
 #include "dpc/optics/rotation.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace dpc {
@@ -43,6 +44,55 @@ RunStatistics::RunStatistics(const Target& target, int control_count, double act
   rearm_rad_ = 0.5 * lock_threshold_rad_;
   phi_.reserve(control_count);
   for (int c = 0; c < control_count; ++c) phi_.emplace_back(1e-12, 1e12);
+}
+
+void RunStatistics::AddSamples(int64_t first_sample, double sample_period_s, int count,
+                               const double* const* s_out, std::ptrdiff_t stride) {
+  for (int done = 0; done < count;) {
+    // Up to the end of the buffer; the loops below have no other exit (they vectorize).
+    const int n = std::min(count - done, kBatch - pending_);
+    const std::ptrdiff_t from = static_cast<std::ptrdiff_t>(done) * stride;
+    const double *x = s_out[0] + from, *y = s_out[1] + from, *z = s_out[2] + from;
+    for (int i = 0; i < n; ++i) {
+      pending_t_s_[pending_ + i] = static_cast<double>(first_sample + done + i) * sample_period_s;
+    }
+    if (point_target_) {
+      for (int i = 0; i < n; ++i) {
+        const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(i) * stride;
+        const double dx = x[at] - target_x_, dy = y[at] - target_y_, dz = z[at] - target_z_;
+        pending_chord_squared_[pending_ + i] = dx * dx + dy * dy + dz * dz;
+      }
+    } else {
+      for (int i = 0; i < n; ++i) {
+        const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(i) * stride;
+        pending_s_out_[pending_ + i][0] = x[at];
+        pending_s_out_[pending_ + i][1] = y[at];
+        pending_s_out_[pending_ + i][2] = z[at];
+      }
+    }
+    pending_ += n;
+    done += n;
+    if (pending_ == kBatch) Flush();
+  }
+}
+
+void RunStatistics::AddControls(RunStatistics* const* statistics, int runs,
+                                const double* const* phi, int count, std::ptrdiff_t row_stride) {
+  for (int c = 0; c < statistics[0]->control_count_; ++c) {
+    LogHistogram* histograms[4] = {};
+    for (int j = 0; j < runs; ++j) histograms[j] = &statistics[j]->phi_[static_cast<size_t>(c)];
+    LogHistogram::AddBatchLanes(histograms, runs, phi[c], count, row_stride);
+  }
+}
+
+void RunStatistics::AddUpdates(const UpdateTally& tally) {
+  updates_.updates += tally.updates;
+  updates_.nullspace_active += tally.nullspace_active;
+  updates_.failed += tally.failed;
+  updates_.rank_deficient += tally.rank_deficient;
+  updates_.clamped += tally.clamped;
+  updates_.near_singular += tally.near_singular;
+  updates_.min_sigma_squared = std::min(updates_.min_sigma_squared, tally.min_sigma_squared);
 }
 
 void RunStatistics::Flush() const {
@@ -155,14 +205,17 @@ void RunStatistics::Flush() const {
   if (w < window_count) even += window_raw_leaks[w];
   CompensatedAdd(even + odd, &leak_sum_, &leak_compensation_);
   error_deg_.AddBatch(window_error_deg, window_count);
-  // Controls: up to four histograms at once, more one at a time.
+  // Controls (AddSample's): up to four histograms at once, more one at a time.
+  const int rows = pending_phi_rows_;
+  pending_phi_rows_ = 0;
+  if (rows == 0) return;
   if (control_count_ <= 4) {
     LogHistogram* histograms[4] = {};
     for (int c = 0; c < control_count_; ++c) histograms[c] = &phi_[c];
-    LogHistogram::AddBatchLanes(histograms, control_count_, pending_phi_.data(), count);
+    LogHistogram::AddBatchLanes(histograms, control_count_, pending_phi_.data(), rows);
   } else {
     for (int c = 0; c < control_count_; ++c) {
-      phi_[c].AddBatch(pending_phi_.data() + c, count, phi_stride_);
+      phi_[c].AddBatch(pending_phi_.data() + c, rows, phi_stride_);
     }
   }
 }
@@ -232,16 +285,16 @@ RunSummary RunStatistics::Summarize(int64_t samples, int64_t resets) const {
     s.phi_p1.push_back(h.count() ? h.Percentile(1.0) : NAN);
     s.phi_p99.push_back(h.count() ? h.Percentile(99.0) : NAN);
   }
-  s.updates = updates_;
-  s.nullspace_active_fraction =
-      updates_ ? static_cast<double>(nullspace_active_) / static_cast<double>(updates_) : 0.0;
-  s.failed_updates = failed_;
-  s.rank_deficient_updates = rank_deficient_;
-  s.clamped_updates = clamped_;
+  const UpdateTally& u = updates_;
+  const double updates = static_cast<double>(u.updates);
+  s.updates = u.updates;
+  s.nullspace_active_fraction = u.updates ? static_cast<double>(u.nullspace_active) / updates : 0.0;
+  s.failed_updates = u.failed;
+  s.rank_deficient_updates = u.rank_deficient;
+  s.clamped_updates = u.clamped;
   s.resets = resets;
-  s.sigma_min_min = updates_ ? std::sqrt(min_sigma_squared_) : NAN;
-  s.near_singular_fraction =
-      updates_ ? static_cast<double>(near_singular_) / static_cast<double>(updates_) : 0.0;
+  s.sigma_min_min = u.updates ? std::sqrt(u.min_sigma_squared) : NAN;
+  s.near_singular_fraction = u.updates ? static_cast<double>(u.near_singular) / updates : 0.0;
   return s;
 }
 

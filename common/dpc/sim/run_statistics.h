@@ -27,7 +27,9 @@
 //                updates, the smallest σ_min of the task Jacobian and the fraction of updates
 //                with σ_min < 0.1·σ_max (near a singularity)
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -72,6 +74,36 @@ struct RunSummary {
   double near_singular_fraction = 0.0;
 };
 
+/// What the statistics keep of the controller's updates (RunStatistics::AddUpdate). A batched
+/// simulator tallies its lanes' updates apart and adds each lane's at once (AddUpdates).
+struct UpdateTally {
+  /// σ_min below this fraction of σ_max counts as near a singularity.
+  static constexpr double kNearSingularRatio = 0.1;
+
+  int64_t updates = 0, nullspace_active = 0, failed = 0, rank_deficient = 0, clamped = 0;
+  int64_t near_singular = 0;           ///< updates with σ_min < kNearSingularRatio·σ_max
+  double min_sigma_squared = INFINITY;  ///< the smallest σ_min² seen
+
+  /// One update's outcome. The singular values' square roots are taken only for a candidate
+  /// new minimum.
+  void Add(bool nullspace_active_now, bool failed_now, bool rank_deficient_now, bool clamped_now,
+           const SingularValues& singular_values) {
+    ++updates;
+    nullspace_active += nullspace_active_now;
+    failed += failed_now;
+    rank_deficient += rank_deficient_now;
+    clamped += clamped_now;
+    AddSingularValues(singular_values);
+  }
+  /// The singular values' part of Add: the smallest σ_min² and the near-singular count.
+  void AddSingularValues(const SingularValues& singular_values) {
+    if (singular_values.MayBeBelow(min_sigma_squared)) {
+      min_sigma_squared = std::min(min_sigma_squared, singular_values.min_squared());
+    }
+    near_singular += singular_values.IsBelowRatio(kNearSingularRatio);
+  }
+};
+
 class RunStatistics {
  public:
   /// The error of a 40-dB leak (sin²(α/2) = 1e-4): the recovery statistics' threshold.
@@ -96,14 +128,28 @@ class RunStatistics {
   }
   /// The same with the controls as control_count consecutive values.
   void AddSample(double t_s, const StokesVector& s_out, const double* phi_applied);
+  /// Real-time. `count` samples, the i-th at t_s = (first_sample + i)·sample_period_s with the
+  /// true S_out (s_out[c][i·stride], c < 3), without their controls: together with AddControls
+  /// the same as AddSample on each, for a caller holding them strided (the batched simulator's
+  /// lanes).
+  void AddSamples(int64_t first_sample, double sample_period_s, int count,
+                  const double* const* s_out, std::ptrdiff_t stride);
+  /// Real-time. The controls of `count` samples of up to four runs at once (the lanes of a
+  /// batch), run j's (statistics[j], j < runs ≤ 4, each with control_count ≤ 4) being
+  /// phi[c][i·row_stride + j]: what AddSample gives the control statistics.
+  static void AddControls(RunStatistics* const* statistics, int runs, const double* const* phi,
+                          int count, std::ptrdiff_t row_stride);
 
   /// σ_min below this fraction of σ_max counts as near a singularity.
-  static constexpr double kNearSingularRatio = 0.1;
+  static constexpr double kNearSingularRatio = UpdateTally::kNearSingularRatio;
 
-  /// Real-time. One controller update's outcome. The singular values' square roots are taken
-  /// only for a candidate new minimum.
+  /// Real-time. One controller update's outcome (UpdateTally::Add).
   void AddUpdate(bool nullspace_active, bool failed, bool rank_deficient, bool clamped,
-                 const SingularValues& singular_values);
+                 const SingularValues& singular_values) {
+    updates_.Add(nullspace_active, failed, rank_deficient, clamped, singular_values);
+  }
+  /// Updates tallied elsewhere: the same as AddUpdate on each of them.
+  void AddUpdates(const UpdateTally& tally);
 
   /// The summary so far; `samples` is the total simulated sample count, `resets` the law's.
   RunSummary Summarize(int64_t samples, int64_t resets) const;
@@ -131,6 +177,7 @@ class RunStatistics {
   /// kBatch rows of phi_stride_ (sample-major): up to four controls fill one row of four, which
   /// Flush adds to the four histograms at once (LogHistogram::AddBatchLanes).
   mutable std::vector<double> pending_phi_;
+  mutable int pending_phi_rows_ = 0;  ///< AddSample's (AddSamples leaves the controls out)
   int phi_stride_;
 
   // Error window.
@@ -159,9 +206,7 @@ class RunStatistics {
 
   // Controls and controller.
   mutable std::vector<LogHistogram> phi_;
-  int64_t updates_ = 0, nullspace_active_ = 0, failed_ = 0, rank_deficient_ = 0, clamped_ = 0;
-  int64_t near_singular_ = 0;
-  double min_sigma_squared_ = INFINITY;
+  UpdateTally updates_;
 };
 
 inline void RunStatistics::AddSample(double t_s, const StokesVector& s_out,
@@ -176,25 +221,12 @@ inline void RunStatistics::AddSample(double t_s, const StokesVector& s_out,
     pending_s_out_[i][1] = s_out[1];
     pending_s_out_[i][2] = s_out[2];
   }
-  double* phi = pending_phi_.data() + static_cast<ptrdiff_t>(i) * phi_stride_;
+  double* phi = pending_phi_.data() + static_cast<ptrdiff_t>(pending_phi_rows_++) * phi_stride_;
   DispatchCount(control_count_, [&](auto fixed) {
     const int count = FixedOr(fixed, control_count_);
     for (int c = 0; c < count; ++c) phi[c] = phi_applied[c];
   });
   if (++pending_ == kBatch) Flush();
-}
-
-inline void RunStatistics::AddUpdate(bool nullspace_active, bool failed, bool rank_deficient,
-                              bool clamped, const SingularValues& singular_values) {
-  ++updates_;
-  nullspace_active_ += nullspace_active;
-  failed_ += failed;
-  rank_deficient_ += rank_deficient;
-  clamped_ += clamped;
-  if (singular_values.MayBeBelow(min_sigma_squared_)) {
-    min_sigma_squared_ = std::min(min_sigma_squared_, singular_values.min_squared());
-  }
-  near_singular_ += singular_values.IsBelowRatio(kNearSingularRatio);
 }
 
 }  // namespace dpc

@@ -2,8 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
+#include <vector>
+
+#include "support/run_summary_expect.h"
 
 namespace dpc {
 namespace {
@@ -250,6 +254,81 @@ TEST(RunStatisticsTest, UpdateCounters) {
   EXPECT_EQ(s.resets, 7);
   EXPECT_NEAR(s.sigma_min_min, 0.01, 1e-15);
   EXPECT_NEAR(s.near_singular_fraction, 1.0 / 3.0, 1e-15);
+}
+
+// The batched simulator's way in: samples strided among other runs' (AddSamples), their controls
+// four runs at once (AddControls), the updates tallied apart (AddUpdates). Every figure must be
+// the sample-by-sample one, bit for bit, whatever the chunks (across the buffer's batches too)
+// and when the ways are mixed.
+TEST(RunStatisticsTest, StridedSamplesControlsAndTalliesEqualOneAtATime) {
+  constexpr int kRuns = 3, kStride = 8, kControls = 4;
+  const int n = 3 * RunStatistics::kBatch + 41;
+  const double period_s = 2e-8;
+  std::vector<double> out[3], phi[kControls];
+  for (auto& v : out) v.assign(static_cast<size_t>(n) * kStride, NAN);
+  for (auto& v : phi) v.assign(static_cast<size_t>(n) * kStride, NAN);
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < kRuns; ++j) {
+      // An error that locks, leaves and comes back; a different one in each run.
+      const double error_deg = k < 300 + 40 * j ? 20.0 - 0.05 * k : 0.2 + 3.0 * (k % 97 == j);
+      const StokesVector s = At(error_deg * kDeg);
+      const size_t at = static_cast<size_t>(k) * kStride + static_cast<size_t>(j);
+      for (int c = 0; c < 3; ++c) out[c][at] = s[c];
+      for (int c = 0; c < kControls; ++c) phi[c][at] = std::sin(0.01 * k + c + j) * (c + 1);
+    }
+  }
+  std::vector<RunStatistics> alone, strided;
+  for (int j = 0; j < kRuns; ++j) {
+    alone.emplace_back(kTarget, kControls, 0.0, 1.0, std::nullopt);
+    strided.emplace_back(kTarget, kControls, 0.0, 1.0, std::nullopt);
+  }
+  UpdateTally tallies[kRuns];
+  const int chunks[] = {1, 63, 64, 200, 7, 256, 300};
+  int k = 0;
+  for (int chunk = 0; k < n; ++chunk) {
+    const int count = std::min(chunks[chunk % 7], n - k);
+    for (int j = 0; j < kRuns; ++j) {
+      for (int i = k; i < k + count; ++i) {
+        const size_t at = static_cast<size_t>(i) * kStride + static_cast<size_t>(j);
+        const double controls[kControls] = {phi[0][at], phi[1][at], phi[2][at], phi[3][at]};
+        alone[static_cast<size_t>(j)].AddSample(static_cast<double>(i) * period_s,
+                                                StokesVector(out[0][at], out[1][at], out[2][at]),
+                                                controls);
+        const SingularValues sv = SingularValues::FromGram(1.0 + i % 5, 0.5, 0.1 * j, 0.4 + i % 3);
+        alone[static_cast<size_t>(j)].AddUpdate(i % 3 == 0, i % 11 == 0, false, false, sv);
+        tallies[j].Add(i % 3 == 0, i % 11 == 0, false, false, sv);
+      }
+      RunStatistics& run = strided[static_cast<size_t>(j)];
+      if (chunk % 5 == 4) {  // this chunk one at a time: the ways mixed
+        for (int i = k; i < k + count; ++i) {
+          const size_t at = static_cast<size_t>(i) * kStride + static_cast<size_t>(j);
+          const double controls[kControls] = {phi[0][at], phi[1][at], phi[2][at], phi[3][at]};
+          run.AddSample(static_cast<double>(i) * period_s,
+                        StokesVector(out[0][at], out[1][at], out[2][at]), controls);
+        }
+        continue;
+      }
+      const size_t at = static_cast<size_t>(k) * kStride + static_cast<size_t>(j);
+      const double* s_out[3] = {&out[0][at], &out[1][at], &out[2][at]};
+      run.AddSamples(k, period_s, count, s_out, kStride);
+    }
+    if (chunk % 5 != 4) {
+      RunStatistics* runs[4] = {&strided[0], &strided[1], &strided[2]};
+      const size_t at = static_cast<size_t>(k) * kStride;
+      const double* controls[kControls] = {&phi[0][at], &phi[1][at], &phi[2][at], &phi[3][at]};
+      RunStatistics::AddControls(runs, kRuns, controls, count, kStride);
+    }
+    k += count;
+  }
+  for (int j = 0; j < kRuns; ++j) {
+    strided[static_cast<size_t>(j)].AddUpdates(tallies[j]);
+    const RunSummary a = alone[static_cast<size_t>(j)].Summarize(n, 0);
+    const RunSummary b = strided[static_cast<size_t>(j)].Summarize(n, 0);
+    SCOPED_TRACE(j);
+    ASSERT_TRUE(a.first_lock_time_s.has_value());
+    EXPECT_GT(a.excursions, 0);
+    ExpectSameRunSummary(a, b);
+  }
 }
 
 }  // namespace
