@@ -16,10 +16,16 @@ foreach(module IN LISTS DPC_CORE_MODULES)
 endforeach()
 list(TRANSFORM DPC_CORE_MODULES PREPEND dpc_ OUTPUT_VARIABLE dpc_core_targets)
 # Eigen's fixed-size types are laid out for the instruction set they are compiled for (AVX: 32-byte
-# alignment): code that includes these headers must be compiled as the library was, or it crashes.
+# alignment, AVX-512: 64-byte): code that includes these headers must be compiled as the library
+# was, or it crashes.
 if(DPC_X86_64_V3)
+  if(DPC_X86_64_V4)
+    set(dpc_march x86-64-v4)
+  else()
+    set(dpc_march x86-64-v3)
+  endif()
   foreach(target IN LISTS dpc_core_targets)
-    target_compile_options(${target} INTERFACE $<INSTALL_INTERFACE:-march=x86-64-v3>)
+    target_compile_options(${target} INTERFACE $<INSTALL_INTERFACE:-march=${dpc_march}>)
   endforeach()
 endif()
 install(TARGETS ${dpc_core_targets} dpc_core EXPORT jacobian_dpc_targets
