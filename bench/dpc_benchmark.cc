@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 
 #include <map>
+#include <set>
 #include <memory>
 #include <optional>
 #include <random>
@@ -406,9 +407,11 @@ void RegisterAll() {
       ->Unit(benchmark::kMillisecond);
 }
 
-// Collects every run for the summary while the console reporter prints as usual. The summary
-// takes CPU time (as the samples/s counters do): on the shared 2-core VM wall time also counts
-// the other processes' turns.
+// Collects every run for the summary while the console reporter prints as usual: with
+// --benchmark_repetitions the median of the repetitions (also under
+// --benchmark_report_aggregates_only), otherwise the one run. The summary takes CPU time (as the
+// samples/s counters do): on the shared 2-core VM wall time also counts the other processes'
+// turns.
 class CollectingReporter : public benchmark::ConsoleReporter {
  public:
   struct Entry {
@@ -417,18 +420,26 @@ class CollectingReporter : public benchmark::ConsoleReporter {
   };
   void ReportRuns(const std::vector<Run>& runs) override {
     for (const Run& run : runs) {
-      if (run.run_type != Run::RT_Iteration) continue;
+      const bool median = run.run_type == Run::RT_Aggregate && run.aggregate_name == "median";
+      const std::string name = run.run_name.str();
+      if (median) {
+        medians_.insert(name);
+      } else if (run.run_type != Run::RT_Iteration || medians_.count(name) != 0) {
+        continue;
+      }
       Entry e{run.GetAdjustedCPUTime() * NanosecondsPer(run.time_unit), 0.0};
       if (auto it = run.counters.find("samples_per_s"); it != run.counters.end()) {
         e.samples_per_s = it->second.value;
       }
-      entries[run.benchmark_name()] = e;
+      entries[name] = e;
     }
     ConsoleReporter::ReportRuns(runs);
   }
   std::map<std::string, Entry> entries;
 
  private:
+  std::set<std::string> medians_;
+
   static double NanosecondsPer(benchmark::TimeUnit unit) {
     switch (unit) {
       case benchmark::kNanosecond: return 1.0;
