@@ -15,10 +15,10 @@
 #include <fmt/format.h>
 
 #include <map>
-#include <set>
 #include <memory>
 #include <optional>
 #include <random>
+#include <set>
 #include <string>
 #include <thread>
 #include <tuple>

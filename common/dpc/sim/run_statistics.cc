@@ -56,19 +56,9 @@ void RunStatistics::AddSamples(int64_t first_sample, double sample_period_s, int
     for (int i = 0; i < n; ++i) {
       pending_t_s_[pending_ + i] = static_cast<double>(first_sample + done + i) * sample_period_s;
     }
-    if (point_target_) {
-      for (int i = 0; i < n; ++i) {
-        const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(i) * stride;
-        const double dx = x[at] - target_x_, dy = y[at] - target_y_, dz = z[at] - target_z_;
-        pending_chord_squared_[pending_ + i] = dx * dx + dy * dy + dz * dz;
-      }
-    } else {
-      for (int i = 0; i < n; ++i) {
-        const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(i) * stride;
-        pending_s_out_[pending_ + i][0] = x[at];
-        pending_s_out_[pending_ + i][1] = y[at];
-        pending_s_out_[pending_ + i][2] = z[at];
-      }
+    for (int i = 0; i < n; ++i) {
+      const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(i) * stride;
+      PendOutput(pending_ + i, x[at], y[at], z[at]);
     }
     pending_ += n;
     done += n;
@@ -83,16 +73,6 @@ void RunStatistics::AddControls(RunStatistics* const* statistics, int runs,
     for (int j = 0; j < runs; ++j) histograms[j] = &statistics[j]->phi_[static_cast<size_t>(c)];
     LogHistogram::AddBatchLanes(histograms, runs, phi[c], count, row_stride);
   }
-}
-
-void RunStatistics::AddUpdates(const UpdateTally& tally) {
-  updates_.updates += tally.updates;
-  updates_.nullspace_active += tally.nullspace_active;
-  updates_.failed += tally.failed;
-  updates_.rank_deficient += tally.rank_deficient;
-  updates_.clamped += tally.clamped;
-  updates_.near_singular += tally.near_singular;
-  updates_.min_sigma_squared = std::min(updates_.min_sigma_squared, tally.min_sigma_squared);
 }
 
 void RunStatistics::Flush() const {

@@ -86,6 +86,16 @@ struct UpdateTally {
 
   /// One update's outcome. The singular values' square roots are taken only for a candidate
   /// new minimum.
+  /// Another tally's updates, as if each had been added here.
+  void Merge(const UpdateTally& other) {
+    updates += other.updates;
+    nullspace_active += other.nullspace_active;
+    failed += other.failed;
+    rank_deficient += other.rank_deficient;
+    clamped += other.clamped;
+    near_singular += other.near_singular;
+    min_sigma_squared = std::min(min_sigma_squared, other.min_sigma_squared);
+  }
   void Add(bool nullspace_active_now, bool failed_now, bool rank_deficient_now, bool clamped_now,
            const SingularValues& singular_values) {
     ++updates;
@@ -149,12 +159,23 @@ class RunStatistics {
     updates_.Add(nullspace_active, failed, rank_deficient, clamped, singular_values);
   }
   /// Updates tallied elsewhere: the same as AddUpdate on each of them.
-  void AddUpdates(const UpdateTally& tally);
+  void AddUpdates(const UpdateTally& tally) { updates_.Merge(tally); }
 
   /// The summary so far; `samples` is the total simulated sample count, `resets` the law's.
   RunSummary Summarize(int64_t samples, int64_t resets) const;
 
  private:
+  /// Buffers sample i's output: |S_out − S*|² for a point target, S_out itself otherwise.
+  void PendOutput(int i, double x, double y, double z) {
+    if (point_target_) {
+      const double dx = x - target_x_, dy = y - target_y_, dz = z - target_z_;
+      pending_chord_squared_[i] = dx * dx + dy * dy + dz * dz;
+    } else {
+      pending_s_out_[i][0] = x;
+      pending_s_out_[i][1] = y;
+      pending_s_out_[i][2] = z;
+    }
+  }
   /// Folds the buffered samples into the statistics.
   void Flush() const;
   /// The recovery stretches through `count` window samples (error in degrees, time).
@@ -213,14 +234,7 @@ inline void RunStatistics::AddSample(double t_s, const StokesVector& s_out,
                               const double* phi_applied) {
   const int i = pending_;
   pending_t_s_[i] = t_s;
-  if (point_target_) {
-    const double dx = s_out[0] - target_x_, dy = s_out[1] - target_y_, dz = s_out[2] - target_z_;
-    pending_chord_squared_[i] = dx * dx + dy * dy + dz * dz;
-  } else {
-    pending_s_out_[i][0] = s_out[0];
-    pending_s_out_[i][1] = s_out[1];
-    pending_s_out_[i][2] = s_out[2];
-  }
+  PendOutput(i, s_out[0], s_out[1], s_out[2]);
   double* phi = pending_phi_.data() + static_cast<ptrdiff_t>(pending_phi_rows_++) * phi_stride_;
   DispatchCount(control_count_, [&](auto fixed) {
     const int count = FixedOr(fixed, control_count_);
