@@ -136,6 +136,17 @@ class Project:
     def down(self):
         self("down", "-v", "--remove-orphans", "-t", "10", check=False, timeout=300)
 
+    def print_logs(self, tail=80):
+        """The last `tail` lines of every container's log (a failed check's evidence, which
+        `down` would remove with the containers)."""
+        label = f"label=com.docker.compose.project={self.name}"
+        for container in run(["docker", "ps", "-a", "-q", "--filter", label], check=False).stdout.split():
+            name = run(["docker", "inspect", "-f", "{{.Name}} (exit {{.State.ExitCode}})", container],
+                       check=False).stdout.strip()
+            logs = run(["docker", "logs", "--tail", str(tail), container], check=False)
+            log(f"--- the last {tail} log lines of {name or container} ---")
+            print(logs.stdout or "", flush=True)
+
 
 # --- watching from the host -------------------------------------------------------------------
 

@@ -363,6 +363,9 @@ def failover_and_hold(args, base, work):
         unclean = {name: code for name, code in exits.items() if code != "0" and "_controller_" not in name}
         expect(not unclean, f"every service exits 0 on SIGTERM (the killed controller aside): {unclean or 'all'}")
         expect(figures["stop_s"] < 8, f"`stop` did not wait for the 10 s kill timeout ({figures['stop_s']:.2f} s)")
+    except BaseException:
+        project.print_logs()
+        raise
     finally:
         if bench:
             bench.stop()
@@ -444,6 +447,10 @@ def split_deployment(args, base, work, secure):
         leftovers = {**solver_project.leftovers(), **bench_project.leftovers()}
         expect(not leftovers, f"the documented teardown, {'solver' if secure else 'bench'} first, left nothing "
                               f"({leftovers or 'none'})")
+    except BaseException:
+        solver_project.print_logs()
+        bench_project.print_logs()
+        raise
     finally:
         if bench:
             bench.stop()
