@@ -72,6 +72,16 @@ struct BatchMath {
 #endif
     }
   }
+  /// The low byte of each lane of `m`, stored at p[0 … W).
+  [[gnu::always_inline]] static void StoreBytes(uint8_t* p, M m) {
+#ifdef __AVX512F__
+    if constexpr (W == 8) {
+      _mm_storel_epi64(reinterpret_cast<__m128i*>(p), _mm512_cvtepi64_epi8(std::bit_cast<__m512i>(m)));
+      return;
+    }
+#endif
+    for (int l = 0; l < W; ++l) p[l] = static_cast<uint8_t>(m[l]);
+  }
   /// a·b + c: one rounding when kFused (as MulAdd of rotation.h / lanes.h in the scalar build).
   template <bool kFused>
   [[gnu::always_inline]] static V MulAdd(V a, V b, V c) {
@@ -308,14 +318,11 @@ void RunBatchBlockFor(BatchLanes& lanes, const BatchBlock& block, const Axes& ax
       incremental_steps[l] = 0;
     }
     // The outcome, and the command into the delay line.
-    const unsigned active_bits = Math::Bits(mu_null > 0.0);
-    for (int l = 0; l < W; ++l) {
-      const unsigned bit = 1u << l;
-      block.flags[at + l] = static_cast<uint8_t>(
-          kBatchUpdated | ((finite_bits & bit) != 0 ? kBatchApplied : 0) |
-          ((active_bits & bit) != 0 ? kBatchNullspaceActive : 0) |
-          ((well_bits & bit) == 0 ? kBatchNearSingular : 0));
-    }
+    // One vector of the lanes' flags, narrowed to a byte per lane.
+    const M flags = int64_t{kBatchUpdated} | (finite & int64_t{kBatchApplied}) |
+                    ((mu_null > 0.0) & int64_t{kBatchNullspaceActive}) |
+                    (~well & int64_t{kBatchNearSingular});
+    Math::StoreBytes(block.flags + at, flags);
     Math::Store(block.gram[0] + at, g11);
     Math::Store(block.gram[1] + at, g22);
     Math::Store(block.gram[2] + at, g12);
