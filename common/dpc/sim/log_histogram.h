@@ -209,22 +209,34 @@ inline void LogHistogram::AddBatch(const double* values, int count,
   constexpr int64_t kInfinity = static_cast<int64_t>(kInfinityBits);
   const int64_t zero = zero_index_;
   const auto value_at = [values, stride](int i) { return values[i * stride]; };
-  // Minimum, maximum and the sum, NaNs left out (std::min/max keep the first operand against a
-  // NaN). The sum is blocked: plain in two accumulators (even and odd samples, error ≲ count·ε
-  // of the batch sum), folded into the compensated total once; registers, not an array indexed
-  // by i & 1, which the compiler would keep in memory (a chain of store-to-load forwards).
-  double low = min_, high = max_, even = 0.0, odd = 0.0;
-  const auto add = [&](double value, double* sum) {
-    low = std::min(low, value);
-    high = std::max(high, value);
-    *sum += std::isnan(value) ? 0.0 : value;
-  };
-  const int pair_end = count & ~1;
-  for (int i = 0; i < pair_end; i += 2) {
-    add(value_at(i), &even);
-    add(value_at(i + 1), &odd);
+  // Minimum, maximum and the sum, NaNs left out (a comparison with a NaN is false: it keeps the
+  // accumulator), four samples per vector operation: lane j takes the samples i ≡ j (mod 4), and
+  // the lanes are folded in a fixed order, so the bits do not depend on the build. The sum is
+  // blocked: plain in the four lanes (error ≲ count·ε of the batch sum), folded into the
+  // compensated total once. The last count mod 4 samples one at a time.
+  Lanes low = Splat(min_), high = Splat(max_), lane_sum = Splat(0.0);
+  const int quad_end = count & ~3;
+  for (int i = 0; i < quad_end; i += 4) {
+    Lanes value;
+    if (stride == 1) {
+      std::memcpy(&value, values + i, sizeof value);
+    } else {
+      value = Lanes{value_at(i), value_at(i + 1), value_at(i + 2), value_at(i + 3)};
+    }
+    low = value < low ? value : low;
+    high = value > high ? value : high;
+    lane_sum += value == value ? value : Splat(0.0);
   }
-  if (pair_end < count) add(value_at(pair_end), &even);
+  // std::min/max keep the first operand against a NaN (the tail's samples).
+  double minimum = std::min(std::min(low[0], low[1]), std::min(low[2], low[3]));
+  double maximum = std::max(std::max(high[0], high[1]), std::max(high[2], high[3]));
+  double sum = (lane_sum[0] + lane_sum[1]) + (lane_sum[2] + lane_sum[3]);
+  for (int i = quad_end; i < count; ++i) {
+    const double value = value_at(i);
+    minimum = std::min(minimum, value);
+    maximum = std::max(maximum, value);
+    sum += std::isnan(value) ? 0.0 : value;
+  }
   // The bins, a chunk at a time: first every index (branch-free, vectorized; a NaN is given the
   // zero bin and taken out again), then the increments. A slowly varying signal (an error near
   // lock, a control) puts consecutive values in the same bin, and increments of one counter
@@ -258,9 +270,9 @@ inline void LogHistogram::AddBatch(const double* values, int count,
   }
   count_ += static_cast<uint64_t>(count) - nans;
   nan_count_ += nans;
-  min_ = low;
-  max_ = high;
-  AddToSum(even + odd);
+  min_ = minimum;
+  max_ = maximum;
+  AddToSum(sum);
 }
 
 inline void LogHistogram::AddBatchLanes(LogHistogram* const* histograms, int lanes,
