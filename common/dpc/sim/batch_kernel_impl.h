@@ -56,7 +56,7 @@ struct BatchMath {
     return m;
   }
   [[gnu::always_inline]] static V Select(M mask, V a, V b) {
-    return std::bit_cast<V>((std::bit_cast<M>(a) & mask) | (std::bit_cast<M>(b) & ~mask));
+    return mask != 0 ? a : b;  // a blend (AVX2) or a masked move (AVX-512)
   }
   /// Bit l set for each lane l whose mask is set.
   [[gnu::always_inline]] static unsigned Bits(M mask) {
