@@ -18,6 +18,8 @@ bool FiniteMap(const dpc::ControlMapConfig& map) {
     case dpc::ControlMapConfig::Kind::kPolynomial: return dpc::fuzz::AllFinite(map.coefficients_rad);
     case dpc::ControlMapConfig::Kind::kTable:
       return dpc::fuzz::AllFinite(map.table_control) && dpc::fuzz::AllFinite(map.table_angle_rad);
+    case dpc::ControlMapConfig::Kind::kTablesByCondition:
+      return false;  // never read from the wire: a device sends the table resolved at its operating point
   }
   return false;
 }

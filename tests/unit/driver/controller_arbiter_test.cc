@@ -99,7 +99,9 @@ TEST_F(ControllerArbiterTest, AtSlowRatesTheGraceIsOneAndAHalfCommandIntervals) 
   for (int k = 1; k <= 50; ++k) {
     t = (k - 1) * 10 * kMs;
     arbiter_.OnCommand("standby", 0, k, t);
-    if (k > 2) EXPECT_FALSE(arbiter_.Check(t + 4 * kMs));  // once the intervals are known
+    if (k > 2) {
+      EXPECT_FALSE(arbiter_.Check(t + 4 * kMs));  // once the intervals are known
+    }
     arbiter_.OnCommand("primary", 10, k, t + 5 * kMs);
     ASSERT_EQ(arbiter_.obeyed(), "primary") << "sample " << k;
   }
