@@ -147,6 +147,14 @@ class LogHistogram {
   void BinEdges(int64_t index, double* lo, double* hi) const;
   // Compensated addition of `value` into (sum_, compensation_) (TwoSum).
   void AddToSum(double value) noexcept;
+  // Four values into four lanes' minimum, maximum and sum, NaNs left out (a comparison with a
+  // NaN is false: it keeps the accumulator).
+  [[gnu::always_inline]] static void AccumulateLanes(Lanes value, Lanes* low, Lanes* high,
+                                                     Lanes* sum) noexcept {
+    *low = value < *low ? value : *low;
+    *high = value > *high ? value : *high;
+    *sum += value == value ? value : Splat(0.0);
+  }
 
   double min_magnitude_;
   double max_magnitude_;
@@ -209,8 +217,8 @@ inline void LogHistogram::AddBatch(const double* values, int count,
   constexpr int64_t kInfinity = static_cast<int64_t>(kInfinityBits);
   const int64_t zero = zero_index_;
   const auto value_at = [values, stride](int i) { return values[i * stride]; };
-  // Minimum, maximum and the sum, NaNs left out (a comparison with a NaN is false: it keeps the
-  // accumulator), four samples per vector operation: lane j takes the samples i ≡ j (mod 4), and
+  // Minimum, maximum and the sum, NaNs left out, four samples per vector operation
+  // (AccumulateLanes): lane j takes the samples i ≡ j (mod 4), and
   // the lanes are folded in a fixed order, so the bits do not depend on the build. The sum is
   // blocked: plain in the four lanes (error ≲ count·ε of the batch sum), folded into the
   // compensated total once. The last count mod 4 samples one at a time.
@@ -223,9 +231,7 @@ inline void LogHistogram::AddBatch(const double* values, int count,
     } else {
       value = Lanes{value_at(i), value_at(i + 1), value_at(i + 2), value_at(i + 3)};
     }
-    low = value < low ? value : low;
-    high = value > high ? value : high;
-    lane_sum += value == value ? value : Splat(0.0);
+    AccumulateLanes(value, &low, &high, &lane_sum);
   }
   // std::min/max keep the first operand against a NaN (the tail's samples).
   double minimum = std::min(std::min(low[0], low[1]), std::min(low[2], low[3]));
@@ -304,10 +310,7 @@ inline void LogHistogram::AddBatchLanes(LogHistogram* const* histograms, int lan
     for (int i = 0; i < n; ++i) {
       Lanes value;
       std::memcpy(&value, values + row_stride * (start + i), sizeof value);
-      // Comparisons with a NaN are false: it leaves the minimum, maximum and sum alone.
-      low = value < low ? value : low;
-      high = value > high ? value : high;
-      sum += value == value ? value : Splat(0.0);
+      AccumulateLanes(value, &low, &high, &sum);
       const Bits bits = std::bit_cast<Bits>(value);
       const Bits magnitude = bits & INT64_MAX;
       const Bits nan = magnitude > infinity;  // −1 (all bits) where true

@@ -84,8 +84,6 @@ struct UpdateTally {
   int64_t near_singular = 0;           ///< updates with σ_min < kNearSingularRatio·σ_max
   double min_sigma_squared = INFINITY;  ///< the smallest σ_min² seen
 
-  /// One update's outcome. The singular values' square roots are taken only for a candidate
-  /// new minimum.
   /// Another tally's updates, as if each had been added here.
   void Merge(const UpdateTally& other) {
     updates += other.updates;
@@ -96,6 +94,8 @@ struct UpdateTally {
     near_singular += other.near_singular;
     min_sigma_squared = std::min(min_sigma_squared, other.min_sigma_squared);
   }
+  /// One update's outcome. The singular values' square roots are taken only for a candidate
+  /// new minimum.
   void Add(bool nullspace_active_now, bool failed_now, bool rank_deficient_now, bool clamped_now,
            const SingularValues& singular_values) {
     ++updates;
