@@ -122,13 +122,17 @@ class Project:
             raise Failure(f"no container for {service} in {self.name}")
         return out[-1]
 
+    @property
+    def label_filter(self):
+        """`docker … --filter` for this project's containers, networks and volumes."""
+        return f"label=com.docker.compose.project={self.name}"
+
     def leftovers(self):
-        label = f"label=com.docker.compose.project={self.name}"
         found = {}
         for kind, command in (("containers", ["docker", "ps", "-a", "-q"]),
                               ("networks", ["docker", "network", "ls", "-q"]),
                               ("volumes", ["docker", "volume", "ls", "-q"])):
-            ids = run([*command, "--filter", label]).stdout.split()
+            ids = run([*command, "--filter", self.label_filter]).stdout.split()
             if ids:
                 found[kind] = ids
         return found
@@ -139,8 +143,8 @@ class Project:
     def print_logs(self, tail=80):
         """The last `tail` lines of every container's log (a failed check's evidence, which
         `down` would remove with the containers)."""
-        label = f"label=com.docker.compose.project={self.name}"
-        for container in run(["docker", "ps", "-a", "-q", "--filter", label], check=False).stdout.split():
+        containers = run(["docker", "ps", "-a", "-q", "--filter", self.label_filter], check=False).stdout.split()
+        for container in containers:
             name = run(["docker", "inspect", "-f", "{{.Name}} (exit {{.State.ExitCode}})", container],
                        check=False).stdout.strip()
             logs = run(["docker", "logs", "--tail", str(tail), container], check=False)
