@@ -67,6 +67,9 @@ class Service {
   /// below it plus a margin. nullopt (the default): run() has no loop that calls Turned(), and
   /// only the stop grace is guarded.
   virtual std::optional<double> LongestTurnS() const { return std::nullopt; }
+  /// What the loop guard watches besides the loop (none by default); a DDS service: the event
+  /// threads of its participants (bus::EventThreadCanary). Off with --stuck-exit-s 0.
+  virtual cli::Heartbeat GuardHeartbeat() const { return {}; }
   /// Before run(): the guard that Turned(), GuardPhase() and stop() report to (ServiceMain's).
   void AttachGuard(cli::LoopGuard* guard) { guard_ = guard; }
 
@@ -195,8 +198,9 @@ int ServiceMain(int argc, char** argv, const std::string& description) {
     spdlog::error("cannot start: {}", e.what());
     return cli::ToInt(cli::ExitCode::kInitializationError);
   }
-  guard = std::make_unique<cli::LoopGuard>(GuardedTurnLimitS(common.stuck_exit_s, service->LongestTurnS()),
-                                           cli::LoopGuard::kStopGraceS, ExitStuck);
+  guard = std::make_unique<cli::LoopGuard>(
+      GuardedTurnLimitS(common.stuck_exit_s, service->LongestTurnS()), cli::LoopGuard::kStopGraceS, ExitStuck,
+      nullptr, common.stuck_exit_s > 0 ? service->GuardHeartbeat() : cli::Heartbeat{});
   service->AttachGuard(guard.get());
   signals.Watch(service.get());
   cli::ExitCode code;

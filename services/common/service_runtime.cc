@@ -55,7 +55,8 @@ void AddCommonOptions(CLI::App& app, CommonOptions* options) {
   app.add_option("--stuck-exit-s", options->stuck_exit_s,
                  "Exit with code 1, saying where, when the service's loop has not turned for this long "
                  "(a call into Fast DDS or a device that never returns), so that a supervisor restarts "
-                 "it; raised to what the service's own timeouts need. 0: never")
+                 "it; raised to what the service's own timeouts need. Also when the event thread of its DDS "
+                 "participant has not run for 3 s (a Fast DDS deadlock). 0: never")
       ->envname("DPC_STUCK_EXIT_S")
       ->check(cli::StuckExitProblem)
       ->capture_default_str();

@@ -13,6 +13,7 @@
 #include "controller_core.h"
 #include "dpc/bench/clock.h"
 #include "dpc/bus/bus_participant.h"
+#include "dpc/bus/event_thread_canary.h"
 #include "dpc/bus/message_conversion.h"
 #include "dpc/bus/participant_maker.h"
 #include "dpc/config/scenario_validation.h"
@@ -74,6 +75,9 @@ class ControllerService final : public Service {
   /// A turn waits one status period.
   std::optional<double> LongestTurnS() const override {
     return std::chrono::duration<double>(status_period_).count();
+  }
+  cli::Heartbeat GuardHeartbeat() const override {
+    return {bus::OldestEventThreadTickNs, bus::kEventThreadStuckS, bus::kEventThreadWhat};
   }
 
   /// Publishes the status every --status-period-s until stop(); a reload (SIGHUP) is done here,

@@ -17,6 +17,7 @@
 #include "dpc/bench/bench_messages.h"
 #include "dpc/bench/clock.h"
 #include "dpc/bus/bus_participant.h"
+#include "dpc/bus/event_thread_canary.h"
 #include "dpc/bus/message_conversion.h"
 #include "dpc/bus/participant_maker.h"
 #include "dpc/config/scenario_builders.h"
@@ -111,6 +112,9 @@ class DriverService final : public Service {
 
   /// A tick waits at most kMaxSleepNs; the waveplates' I/O has a thread of its own.
   std::optional<double> LongestTurnS() const override { return 0.0; }
+  cli::Heartbeat GuardHeartbeat() const override {
+    return {bus::OldestEventThreadTickNs, bus::kEventThreadStuckS, bus::kEventThreadWhat};
+  }
 
   /// The ticker: wakes when the core's next deadline is due (a stand-in's wait, the obeyed
   /// controller's grace or silence timeout, the holding heartbeat), at most every --tick-s; a

@@ -15,6 +15,7 @@
 #include "bench_core.h"
 #include "dds_bench_link.h"
 #include "dpc/bus/bus_participant.h"
+#include "dpc/bus/event_thread_canary.h"
 #include "dpc/bench/clock.h"
 #include "dpc/bus/recorded_bench.h"
 #include "dpc/cli/run_report.h"
@@ -191,6 +192,9 @@ class PolarimeterService final : public Service {
   std::optional<double> LongestTurnS() const override {
     if (!instrument_) return 0.0;
     return 6.0 * instrument_->device().link.response_timeout_s + 0.1;
+  }
+  cli::Heartbeat GuardHeartbeat() const override {
+    return {bus::OldestEventThreadTickNs, bus::kEventThreadStuckS, bus::kEventThreadWhat};
   }
 
   cli::ExitCode run() override {

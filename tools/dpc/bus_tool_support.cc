@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "dpc/bench/clock.h"
+#include "dpc/bus/event_thread_canary.h"
 #include "dpc/cli/exit_code.h"
 
 namespace dpc::tools {
@@ -90,7 +91,9 @@ bool StopSignals::requested() { return g_stop_requested.load(); }
 void AddStuckExitOption(CLI::App& command, double* seconds, const std::string& what) {
   command.add_option("--stuck-exit-s", *seconds,
                      "Exit with code 1, saying where, when the command's loop has not turned for this long (a "
-                     "call into Fast DDS or a write that never returns)" + what + ". 0: never")
+                     "call into Fast DDS or a write that never returns)" + what +
+                         ", or when the event thread of its DDS participant has not run for 3 s (a Fast DDS "
+                         "deadlock). 0: never")
       ->envname("DPC_STUCK_EXIT_S")
       ->check(cli::StuckExitProblem)
       ->capture_default_str();
@@ -104,7 +107,9 @@ std::unique_ptr<cli::LoopGuard> GuardCommandLoop(const std::string& command, dou
         cli::ExitAfterSaying([command, after, why] { fmt::print(stderr, "\ndpc {}: {}{}\n", command, why, after); },
                              cli::ToInt(cli::ExitCode::kRuntimeError));
       },
-      [] { return StopSignals::requested(); });
+      [] { return StopSignals::requested(); },
+      stuck_exit_s > 0 ? cli::Heartbeat{bus::OldestEventThreadTickNs, bus::kEventThreadStuckS, bus::kEventThreadWhat}
+                       : cli::Heartbeat{});
 }
 
 bool WaitFor(const std::function<bool()>& done, double timeout_s) {

@@ -381,6 +381,7 @@ BusParticipant::BusParticipant(const BusOptions& options, std::function<void(con
                            : fmt::format("Fast DDS could not create a participant on domain {} with {}",
                                          options.domain_id, profiles_file_));
   }
+  canary_ = std::make_unique<EventThreadCanary>(participant_);
 }
 
 std::vector<std::string> BusParticipant::AuthenticatedPeers() const { return discovery_->AuthenticatedPeers(); }
@@ -423,6 +424,7 @@ fdds::Subscriber* BusParticipant::SubscriberFor(const std::string& partition) {
 
 BusParticipant::~BusParticipant() {
   if (participant_ == nullptr) return;
+  canary_.reset();
   // Writers and readers delete their own entities; whatever is left goes here.
   participant_->delete_contained_entities();
   fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);

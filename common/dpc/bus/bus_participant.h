@@ -37,6 +37,7 @@
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
 #include "dpc/bench/source_binding.h"
+#include "dpc/bus/event_thread_canary.h"
 #include "dpc/bus/shm_segments.h"
 #include "dpc/bus/topics.h"
 
@@ -485,6 +486,7 @@ class BusParticipant {
   bool secure_ = false;
   std::unique_ptr<DiscoveryListener> discovery_;  ///< remote writers' partitions
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
+  std::unique_ptr<EventThreadCanary> canary_;  ///< ticks on participant_'s event thread
   std::mutex mutex_;
   std::vector<eprosima::fastdds::dds::Topic*> topics_;
   std::map<std::string, eprosima::fastdds::dds::Publisher*> publishers_;    ///< by partition

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <exception>
 #include <memory>
@@ -18,6 +19,7 @@ std::string StuckJudge::Look(int64_t now_ns, uint64_t turns, bool stopping, std:
     looked_ = true;
     turns_ = turns;
     turned_ns_ = now_ns;
+    window_ns_ = now_ns;
     if (stop_seen_ns_ >= 0) stop_seen_ns_ = now_ns;
   }
   last_look_ns_ = now_ns;
@@ -42,11 +44,22 @@ std::string StuckJudge::Look(int64_t now_ns, uint64_t turns, bool stopping, std:
   return {};
 }
 
+std::string StuckJudge::LookAtBeat(int64_t now_ns, std::optional<int64_t> beat_ns, int64_t limit_ns,
+                                   std::string_view what) const {
+  if (!beat_ns || limit_ns <= 0 || !looked_) return {};
+  const int64_t silent_ns = now_ns - std::max(*beat_ns, window_ns_);
+  if (silent_ns < limit_ns) return {};
+  return fmt::format("stuck: {} has not run for {:.1f} s though its loop turns; exiting with code 1 so that a "
+                     "supervisor restarts it",
+                     what, static_cast<double>(silent_ns) * 1e-9);
+}
+
 LoopGuard::LoopGuard(double turn_limit_s, double stop_grace_s, OnStuck on_stuck,
-                     std::function<bool()> stop_requested)
+                     std::function<bool()> stop_requested, Heartbeat heartbeat)
     : judge_(static_cast<int64_t>(turn_limit_s * 1e9), static_cast<int64_t>(stop_grace_s * 1e9)),
       on_stuck_(std::move(on_stuck)),
-      stop_requested_(std::move(stop_requested)) {
+      stop_requested_(std::move(stop_requested)),
+      heartbeat_(std::move(heartbeat)) {
   thread_ = std::thread([this] { Watch(); });
 }
 
@@ -66,8 +79,12 @@ void LoopGuard::Watch() {
         std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
             .count();
     const bool stopping = stopping_.load(std::memory_order_relaxed) || (stop_requested_ && stop_requested_());
-    const std::string why =
+    std::string why =
         judge_.Look(now_ns, turns_.load(std::memory_order_relaxed), stopping, phase_.load(std::memory_order_relaxed));
+    if (why.empty() && !stopping && heartbeat_.latest_beat_ns) {
+      why = judge_.LookAtBeat(now_ns, heartbeat_.latest_beat_ns(), static_cast<int64_t>(heartbeat_.limit_s * 1e9),
+                              heartbeat_.what);
+    }
     if (why.empty()) continue;
     lock.unlock();
     on_stuck_(why);

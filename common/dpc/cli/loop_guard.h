@@ -9,7 +9,11 @@
 //     secured participant and block the thread that deletes a reader; a file written into a
 //     pipe nobody reads — holds the loop;
 //   - the program was asked to stop (SIGINT, SIGTERM, or its run ended) and has not ended
-//     within the stop grace: its loop or the deletion of its DDS entities does not return.
+//     within the stop grace: its loop or the deletion of its DDS entities does not return;
+//   - a heartbeat the program watches besides its loop (Heartbeat: the event threads of its DDS
+//     participants, bus::EventThreadCanary) has not beaten for the heartbeat's limit, though the
+//     loop turns: Fast DDS 2.9 can deadlock a secured participant's event thread while samples
+//     still flow, and such a participant never discovers anyone again.
 //
 // Then `on_stuck` says why (what the loop was doing: Phase) and ends the process at once with
 // code 1 (cli::ExitCode::kRuntimeError; ExitAfterSaying), so that a supervisor (compose's
@@ -24,6 +28,7 @@
 #include <cstdint>
 #include <functional>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -43,6 +48,11 @@ class StuckJudge {
   /// One look at monotonic `now_ns`: `turns` counted so far, whether a stop was asked, what the
   /// loop is doing. Returns why the process should end now, or "".
   std::string Look(int64_t now_ns, uint64_t turns, bool stopping, std::string_view phase);
+  /// After Look, at the same `now_ns`: the heartbeat's latest beat (steady-clock ns; none: nothing
+  /// to watch), judged against `limit_ns` from the later of the beat and the start of the looks'
+  /// window (a pause of the guard restarts it); `what` names the heartbeat. Returns why the
+  /// process should end now, or "".
+  std::string LookAtBeat(int64_t now_ns, std::optional<int64_t> beat_ns, int64_t limit_ns, std::string_view what) const;
 
  private:
   int64_t turn_limit_ns_;
@@ -51,6 +61,7 @@ class StuckJudge {
   int64_t last_look_ns_ = 0;
   uint64_t turns_ = 0;
   int64_t turned_ns_ = 0;       ///< when the count last changed (as seen by the looks)
+  int64_t window_ns_ = 0;       ///< when the looks' window began (the first look, or after a pause)
   int64_t stop_seen_ns_ = -1;   ///< when a stop was first seen (-1: none yet)
 };
 
@@ -63,6 +74,15 @@ std::string StuckExitProblem(const std::string& text);
 /// without destructors or exit handlers.
 [[noreturn]] void ExitAfterSaying(std::function<void()> say, int code);
 
+/// Something a LoopGuard watches besides the loop: `latest_beat_ns` (thread-safe, asked at each
+/// look) gives the time of its latest beat (steady-clock ns), or none when there is nothing to
+/// watch; no beat for `limit_s` ends the process. `what` names it in the message.
+struct Heartbeat {
+  std::function<std::optional<int64_t>()> latest_beat_ns;
+  double limit_s = 0.0;
+  std::string what;
+};
+
 class LoopGuard {
  public:
   using OnStuck = std::function<void(const std::string& why)>;
@@ -72,7 +92,9 @@ class LoopGuard {
   /// Starts the guard's thread. `turn_limit_s` 0: the loop is not judged. `on_stuck` is called
   /// once, from the guard's thread (it normally ends the process: ExitAfterSaying).
   /// `stop_requested`, if given, is asked at each look too (a flag a signal handler sets).
-  LoopGuard(double turn_limit_s, double stop_grace_s, OnStuck on_stuck, std::function<bool()> stop_requested = {});
+  /// `heartbeat`, if it has a source, is judged while the program is not stopping.
+  LoopGuard(double turn_limit_s, double stop_grace_s, OnStuck on_stuck, std::function<bool()> stop_requested = {},
+            Heartbeat heartbeat = {});
   ~LoopGuard();
   LoopGuard(const LoopGuard&) = delete;
   LoopGuard& operator=(const LoopGuard&) = delete;
@@ -91,6 +113,7 @@ class LoopGuard {
   StuckJudge judge_;
   OnStuck on_stuck_;
   std::function<bool()> stop_requested_;
+  Heartbeat heartbeat_;
   std::atomic<uint64_t> turns_{0};
   std::atomic<const char*> phase_{"its loop"};
   std::atomic<bool> stopping_{false};

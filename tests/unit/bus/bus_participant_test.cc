@@ -5,12 +5,14 @@
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/participant_maker.h"
 
+#include <fastdds/rtps/resources/TimedEvent.h>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <condition_variable>
 #include <ctime>
 #include <cstdlib>
 #include <filesystem>
@@ -306,6 +308,56 @@ TEST_F(BusParticipantTest, ADomainOutOfTheDdsRangeIsRefusedBeforeAnyParticipant)
       EXPECT_NE(std::string(e.what()).find("domain " + std::to_string(domain)), std::string::npos) << e.what();
     }
   }
+}
+
+// The canary ticks on the participant's event thread, and stops ticking while that thread is
+// held (here by an event of the test's own that waits: what Fast DDS 2.9's deadlock does to it).
+TEST_F(BusParticipantTest, TheEventThreadCanaryTicksAndStopsWhileTheEventThreadIsHeld) {
+  EXPECT_FALSE(OldestEventThreadTickNs().has_value()) << "no participant, no canary";
+  // Whether the canary ticks after `after_ns` within 5 s (a loaded machine delays the thread).
+  const auto ticks_after = [](int64_t after_ns) {
+    for (int i = 0; i < 500; ++i) {
+      if (*OldestEventThreadTickNs() > after_ns) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return false;
+  };
+  {
+    BusParticipant participant(Options(kParticipantDomain, "dpc_bus_test"));
+    ASSERT_TRUE(OldestEventThreadTickNs().has_value());
+    EXPECT_TRUE(ticks_after(*OldestEventThreadTickNs())) << "it ticks";
+    EXPECT_TRUE(ticks_after(*OldestEventThreadTickNs())) << "again";
+
+    std::mutex mutex;
+    std::condition_variable changed;
+    bool holding = false, release = false;
+    eprosima::fastrtps::rtps::TimedEvent hold(
+        participant.raw()->get_resource_event(),
+        [&] {
+          std::unique_lock<std::mutex> lock(mutex);
+          holding = true;
+          changed.notify_all();
+          changed.wait(lock, [&] { return release; });
+          return false;
+        },
+        1.0);
+    hold.restart_timer();
+    {
+      std::unique_lock<std::mutex> lock(mutex);
+      ASSERT_TRUE(changed.wait_for(lock, std::chrono::seconds(5), [&] { return holding; }));
+    }
+    const int64_t held_ns = MonotonicNs();
+    std::this_thread::sleep_for(std::chrono::nanoseconds(5 * EventThreadCanary::kPeriodNs));
+    EXPECT_LT(*OldestEventThreadTickNs(), held_ns) << "no tick while the event thread is held";
+    const int64_t released_ns = MonotonicNs();
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      release = true;
+    }
+    changed.notify_all();
+    EXPECT_TRUE(ticks_after(released_ns)) << "ticking again once the thread is free";
+  }
+  EXPECT_FALSE(OldestEventThreadTickNs().has_value()) << "the canary goes with its participant";
 }
 
 TEST(PartitionTest, EveryBenchHasItsOwnAndEachControllerOneInside) {

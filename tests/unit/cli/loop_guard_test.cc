@@ -7,6 +7,7 @@
 #include <atomic>
 #include <chrono>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include <cstdio>
@@ -63,6 +64,39 @@ TEST(StuckJudgeTest, AProcessStoppedAsAWholeIsNotStuckWhenItResumes) {
   EXPECT_NE(loop.Look(31'000 * kMs, 1, false, "x"), "");
 }
 
+TEST(StuckJudgeTest, AHeartbeatSilentForItsLimitIsStuckOneThatBeatsOrIsAbsentIsNot) {
+  StuckJudge judge(0, 8000 * kMs);
+  for (int64_t t = 0; t <= 10'000; t += 100) {
+    EXPECT_EQ(judge.Look(t * kMs, 1, false, "x"), "");
+    EXPECT_EQ(judge.LookAtBeat(t * kMs, (t - 50) * kMs, 3000 * kMs, "its event thread"), "") << t;
+    EXPECT_EQ(judge.LookAtBeat(t * kMs, std::nullopt, 3000 * kMs, "its event thread"), "") << "nothing to watch";
+  }
+  // The last beat at 10 s: not stuck at 12.9 s, stuck at 13 s, and the message says what.
+  for (int64_t t = 10'100; t < 13'000; t += 100) {
+    EXPECT_EQ(judge.Look(t * kMs, 1, false, "x"), "");
+    EXPECT_EQ(judge.LookAtBeat(t * kMs, 10'000 * kMs, 3000 * kMs, "its event thread"), "") << t;
+  }
+  EXPECT_EQ(judge.Look(13'000 * kMs, 1, false, "x"), "");
+  const std::string why = judge.LookAtBeat(13'000 * kMs, 10'000 * kMs, 3000 * kMs, "its event thread");
+  EXPECT_NE(why.find("stuck: its event thread has not run for 3.0 s"), std::string::npos) << why;
+  EXPECT_EQ(judge.LookAtBeat(13'000 * kMs, 10'000 * kMs, 0, "its event thread"), "") << "a limit of 0: off";
+}
+
+TEST(StuckJudgeTest, AHeartbeatIsJudgedFromTheWindowAfterAPauseOfTheWholeProcess) {
+  // SIGSTOP for 30 s: the heartbeat's thread did not run either; it gets a whole new limit.
+  StuckJudge judge(0, 8000 * kMs);
+  EXPECT_EQ(judge.LookAtBeat(0, 0, 3000 * kMs, "x"), "") << "before the first look";
+  EXPECT_EQ(judge.Look(0, 1, false, "x"), "");
+  EXPECT_EQ(judge.Look(30'000 * kMs, 1, false, "x"), "");
+  EXPECT_EQ(judge.LookAtBeat(30'000 * kMs, 0, 3000 * kMs, "x"), "");
+  for (int64_t t = 30'100; t < 33'000; t += 100) {
+    EXPECT_EQ(judge.Look(t * kMs, 1, false, "x"), "");
+    EXPECT_EQ(judge.LookAtBeat(t * kMs, 0, 3000 * kMs, "x"), "") << t;
+  }
+  EXPECT_EQ(judge.Look(33'000 * kMs, 1, false, "x"), "");
+  EXPECT_NE(judge.LookAtBeat(33'000 * kMs, 0, 3000 * kMs, "x"), "");
+}
+
 /// A guard whose action records the message instead of ending the process.
 struct Recorded {
   std::mutex mutex;
@@ -96,6 +130,40 @@ TEST(LoopGuardTest, ATurningLoopIsLeftAloneAndAStuckOneIsReportedOnce) {
   }
   EXPECT_EQ(recorded.calls.load(), 1);
   EXPECT_NE(recorded.why.find("(stuck in: a call that never returns)"), std::string::npos) << recorded.why;
+}
+
+TEST(LoopGuardTest, AHeartbeatThatStopsIsReportedWhileTheLoopTurnsButNotOnceStopping) {
+  Recorded recorded;
+  std::atomic<int64_t> beat_ns{0};
+  const auto now_ns = [] {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+  };
+  {
+    LoopGuard guard(1.0, 8.0, recorded.Action(), {},
+                    Heartbeat{[&beat_ns] { return std::optional<int64_t>(beat_ns.load()); }, 1.0, "the beat"});
+    const auto beat_until = std::chrono::steady_clock::now() + 1500ms;
+    while (std::chrono::steady_clock::now() < beat_until) {
+      guard.Turn();
+      beat_ns = now_ns();
+      std::this_thread::sleep_for(5ms);
+    }
+    EXPECT_EQ(recorded.calls.load(), 0) << "it beats";
+    const auto deadline = std::chrono::steady_clock::now() + 30s;
+    while (recorded.calls.load() == 0 && std::chrono::steady_clock::now() < deadline) {
+      guard.Turn();  // the loop turns; only the heartbeat stopped
+      std::this_thread::sleep_for(5ms);
+    }
+  }
+  EXPECT_EQ(recorded.calls.load(), 1);
+  EXPECT_NE(recorded.why.find("stuck: the beat has not run for"), std::string::npos) << recorded.why;
+
+  Recorded stopping;
+  LoopGuard guard(0.0, 30.0, stopping.Action(), {},
+                  Heartbeat{[] { return std::optional<int64_t>(0); }, 0.5, "the beat"});
+  guard.Stopping();  // a stop has its own grace: the deletion of the participants stops the beats
+  std::this_thread::sleep_for(1500ms);
+  EXPECT_EQ(stopping.calls.load(), 0) << stopping.why;
 }
 
 TEST(LoopGuardTest, AStopThatDoesNotEndIsReported) {
