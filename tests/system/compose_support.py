@@ -3,6 +3,7 @@ compose command, compose projects, `dpc topic echo` from the host, the bench see
 (errors to the target, lock, latest state), and small helpers. Constants name the test's
 networks (in 10.99.0.0/16), image, domain and bench id."""
 
+import glob
 import json
 import math
 import os
@@ -127,6 +128,15 @@ class Project:
         """`docker … --filter` for this project's containers, networks and volumes."""
         return f"label=com.docker.compose.project={self.name}"
 
+    def restarts(self, service):
+        """How often the restart policy has restarted `service`'s container."""
+        return int(run(["docker", "inspect", "-f", "{{.RestartCount}}", self.container(service)]).stdout.strip() or 0)
+
+    def logs(self, service, tail=200):
+        """The last `tail` lines `service`'s container wrote (every run of it), stdout and stderr."""
+        result = run(["docker", "logs", "--tail", str(tail), self.container(service)], check=False)
+        return (result.stdout or "") + (result.stderr or "")
+
     def leftovers(self):
         found = {}
         for kind, command in (("containers", ["docker", "ps", "-a", "-q"]),
@@ -140,16 +150,58 @@ class Project:
     def down(self):
         self("down", "-v", "--remove-orphans", "-t", "10", check=False, timeout=300)
 
+    def dump_stacks(self, path):
+        """Every thread's stack of the dpc processes still running in this project's containers
+        (gdb on the host, as root) into `path`: the evidence of a service stuck inside a library."""
+        if os.geteuid() != 0 or shutil.which("gdb") is None:
+            return None
+        containers = run(["docker", "ps", "-q", "--filter", self.label_filter], check=False).stdout.split()
+        with open(path, "w") as out:
+            for container in containers:
+                inspected = run(["docker", "inspect", "-f", "{{.Name}} {{.State.Pid}}", container],
+                                check=False).stdout.split()
+                if len(inspected) != 2:
+                    continue
+                name, pending, pids = inspected[0], [int(inspected[1])], []
+                while pending:
+                    pid = pending.pop()
+                    pids.append(pid)
+                    for task in glob.glob(f"/proc/{pid}/task/*/children"):
+                        try:
+                            pending += [int(c) for c in open(task).read().split()]
+                        except OSError:
+                            pass
+                for pid in pids:
+                    try:
+                        comm = open(f"/proc/{pid}/comm").read().strip()
+                    except OSError:
+                        continue
+                    if not comm.startswith("dpc"):
+                        continue
+                    result = run(["gdb", "-batch", "-nx", "-ex", f"set sysroot /proc/{pid}/root",
+                                  "-ex", f"attach {pid}", "-ex", "thread apply all bt", "-ex", "detach"],
+                                 check=False, timeout=120)
+                    out.write(f"===== {name} pid {pid} ({comm})\n{result.stdout}\n")
+        return path
+
     def print_logs(self, tail=80):
         """The last `tail` lines of every container's log (a failed check's evidence, which
-        `down` would remove with the containers)."""
+        `down` would remove with the containers), then one line per container (state, exit code,
+        restarts, its last log line): a CI log that keeps only the end of the output keeps that."""
         containers = run(["docker", "ps", "-a", "-q", "--filter", self.label_filter], check=False).stdout.split()
+        brief = []
         for container in containers:
-            name = run(["docker", "inspect", "-f", "{{.Name}} (exit {{.State.ExitCode}})", container],
-                       check=False).stdout.strip()
+            name = run(["docker", "inspect", "-f", "{{.Name}} {{.State.Status}} {{.State.ExitCode}} {{.RestartCount}}",
+                        container], check=False).stdout.split()
             logs = run(["docker", "logs", "--tail", str(tail), container], check=False)
-            log(f"--- the last {tail} log lines of {name or container} ---")
-            print(logs.stdout or "", flush=True)
+            lines = (logs.stdout or "").rstrip("\n").splitlines()
+            log(f"--- the last {tail} log lines of {name[0] if name else container} ---")
+            print("\n".join(lines), flush=True)
+            if len(name) == 4:
+                last = lines[-1] if lines else ""
+                brief.append(f"  {name[0]}: {name[1]}, exit {name[2]}, {name[3]} restarts; last: "
+                             f"{last[:160]}")
+        log("containers at the failure:\n" + "\n".join(brief))
 
 
 # --- watching from the host -------------------------------------------------------------------
@@ -328,13 +380,28 @@ def http_get(port, path="/"):
 
 def dashboard_snapshots(port, wanted, timeout_s=20.0):
     """Opens the dashboard's WebSocket (/ws) as the page does (its own Origin) and returns the
-    first snapshot for which wanted(snapshot) holds, or the last one seen (None if none)."""
+    first snapshot for which wanted(snapshot) holds, or the last one seen (None if none). A
+    dashboard that closes the socket (restarted by its restart policy) is connected to again."""
+    deadline = time.monotonic() + timeout_s
+    seen = []
+    while True:
+        try:
+            return _dashboard_snapshots_until(port, wanted, deadline, seen)
+        except (Failure, OSError) as error:
+            if time.monotonic() + 1.0 >= deadline:
+                if not seen:
+                    raise
+                return seen[-1]
+            log(f"the dashboard's WebSocket ended ({error}); connecting again")
+            time.sleep(1.0)
+
+
+def _dashboard_snapshots_until(port, wanted, deadline, seen):
+    """One connection of dashboard_snapshots: each snapshot is appended to `seen`."""
     import base64
     import socket
     import struct
     key = base64.b64encode(os.urandom(16)).decode()
-    deadline = time.monotonic() + timeout_s
-    last = None
     with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
         s.sendall((f"GET /ws HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\n"
                    f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n"
@@ -370,7 +437,7 @@ def dashboard_snapshots(port, wanted, timeout_s=20.0):
                 length = struct.unpack(">Q", take(8))[0]
             payload = take(length)  # a server's frames are not masked
             if opcode == 8:
-                break
+                raise Failure("the dashboard closed the WebSocket")
             if opcode in (9, 10):  # ping/pong: the page's browser answers; not needed here
                 continue
             message += payload
@@ -383,7 +450,7 @@ def dashboard_snapshots(port, wanted, timeout_s=20.0):
                 continue
             if snapshot.get("type") != "snapshot":
                 continue
-            last = snapshot
+            seen.append(snapshot)
             if wanted(snapshot):
                 return snapshot
-    return last
+    return seen[-1] if seen else None
