@@ -47,7 +47,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from compose_support import (  # noqa: E402
-    BENCH_ID, DOMAIN, IMAGE, PREFIX, REPO, SKIP, SPLIT_PREFIX, Bench, Engine, Failure, Project,
+    BENCH_ID, DOMAIN, IMAGE, PREFIX, REPO, SKIP, SPLIT_PREFIX, Bench, Engine, Failure, Project, angle_deg,
     compose_command, cyclone_reads, dashboard_snapshots, expect, free_port, host_profile, http_get, log,
     loop_latencies_us, max_abs_difference, run)
 
@@ -311,6 +311,16 @@ def failover_and_hold(args, base, work):
             f"{figures['error_before_kill_max_deg']:.2f}° in the second before, "
             f"{figures['error_after_kill_max_deg']:.2f}° after")
         expect(figures["failover_gap_ms"] < 100, f"failover within 100 ms ({figures['failover_gap_ms']:.2f} ms)")
+        if figures["error_after_kill_max_deg"] >= max(5.0, 2 * figures["error_before_kill_max_deg"]):
+            # The evidence a CI log keeps: the worst samples after the kill, each with its time
+            # after the kill, its sequence number, and the controller the driver obeyed then.
+            obeyed = [(t, m.get("obeyed_controller_id"), m.get("mode")) for t, m in bench.states.snapshot(killed)]
+            target = bench.target()
+            worst = sorted(((angle_deg(m["s_out"], target), t, m.get("sequence_number"))
+                            for t, m in bench.samples.snapshot(killed)), reverse=True)[:5]
+            for error, t, sequence in worst:
+                by = next((f"{who} ({mode})" for when, who, mode in reversed(obeyed) if when <= t), "?")
+                log(f"  error {error:.2f}° at +{(t - killed) * 1e3:.0f} ms (sample {sequence}), driver obeying {by}")
         expect(figures["error_after_kill_max_deg"] < max(5.0, 2 * figures["error_before_kill_max_deg"]),
                "the output stayed locked across the failover")
         bench.wait(lambda: bench.locked_since(killed, window_s=0.5) is not None, 10, "the output to lock under the standby")
