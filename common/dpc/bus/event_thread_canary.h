@@ -7,8 +7,9 @@
 // removing the first holds SecurityManager's lock while it waits for the event thread to be idle
 // (~TimedEvent), and the event thread removing the second waits for that lock. Seen with thread
 // stacks on a secured bench: a driver whose controllers left that way never noticed either one
-// leaving, never discovered anyone again, and hung when asked to stop (ARCHITECTURE.md, "When
-// Fast DDS deadlocks"). Samples keep flowing through such a participant, so nothing else shows it.
+// leaving, never discovered anyone again, and hung when asked to stop (ARCHITECTURE.md, where it
+// describes the loop guard). Samples keep flowing through such a participant, so nothing else
+// shows it.
 //
 // The canary is a TimedEvent on the participant's event thread (DomainParticipant::
 // get_resource_event) that stamps the time every kPeriodNs. While its participant lives it is
