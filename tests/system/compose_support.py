@@ -101,6 +101,12 @@ def compose_command():
     return None
 
 
+def container_logs(container, tail):
+    """The last `tail` lines a container wrote (every run of it), stdout then stderr."""
+    result = run(["docker", "logs", "--tail", str(tail), container], check=False)
+    return (result.stdout or "") + (result.stderr or "")
+
+
 class Project:
     """One compose project: its own name, files and environment."""
 
@@ -134,8 +140,7 @@ class Project:
 
     def logs(self, service, tail=200):
         """The last `tail` lines `service`'s container wrote (every run of it), stdout and stderr."""
-        result = run(["docker", "logs", "--tail", str(tail), self.container(service)], check=False)
-        return (result.stdout or "") + (result.stderr or "")
+        return container_logs(self.container(service), tail)
 
     def leftovers(self):
         found = {}
@@ -193,8 +198,7 @@ class Project:
         for container in containers:
             name = run(["docker", "inspect", "-f", "{{.Name}} {{.State.Status}} {{.State.ExitCode}} {{.RestartCount}}",
                         container], check=False).stdout.split()
-            logs = run(["docker", "logs", "--tail", str(tail), container], check=False)
-            lines = (logs.stdout or "").rstrip("\n").splitlines()
+            lines = container_logs(container, tail).rstrip("\n").splitlines()
             log(f"--- the last {tail} log lines of {name[0] if name else container} ---")
             print("\n".join(lines), flush=True)
             if len(name) == 4:
