@@ -121,27 +121,47 @@ TEST_F(BenchLoopTest, RateCommandsTrackARotationAcrossProcesses) {
 }
 
 TEST_F(BenchLoopTest, TheRangeCriterionKeepsASlowBenchsChannelsInsideTheirRanges) {
-  // The emulator's device in volts (±10 V, simulated) at 500 Hz: too slow for the paper's
-  // null-space pull to hold phi against the scrambler, so a channel reaches its end a few times
-  // a minute (seen: -10 V and a 92.7° error in 20 s). The range criterion, given to every
-  // service, reaches the controller's law through the driver's device description and keeps
-  // every channel inside (seen: down to -8.3 V, max 13.8°).
-  const std::string scenario = std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/emulator_epc.pbtxt";
+  // The emulator's device in volts (±10 V, simulated) at 500 Hz with one sample of delay: too
+  // slow for the paper's null-space pull to hold phi against the scrambler. In lockstep (so the
+  // run is dpc sim's, seed 1, whatever the machine's load) channel 2 reaches -10 V and the error
+  // 92.7° within 15 s without the range criterion. The criterion, given to every service,
+  // reaches the controller's law through the driver's device description and keeps every
+  // channel inside: down to -8.3 V, max error 11.9°. (In real time the trajectory depends on
+  // the timing; over 60 seeds of dpc sim the criterion still touched a limit in 2.)
+  const std::string source = std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/emulator_epc.pbtxt";
+  std::ifstream in(source);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string scenario_text = text.str();
+  // The dithering baseline's reset lasts at least one sample: one sample at 500 Hz.
+  const std::string reset = "reset_duration_s: 1e-4";
+  const size_t at = scenario_text.find(reset);
+  ASSERT_NE(at, std::string::npos) << source;
+  scenario_text.replace(at, reset.size(), "reset_duration_s: 2e-3");
+  const std::string scenario = dir_ + "/emulator_epc_500hz.pbtxt";
+  std::ofstream(scenario) << scenario_text;
+  auto with = [&](std::vector<std::string> args) {
+    const std::vector<std::string> common = {
+        scenario, "--range", "10", "--sample-rate-hz", "500", "--delay-s", "2e-3", "--duration-s", "15"};
+    args.insert(args.begin(), common.begin(), common.end());
+    return args;
+  };
   StartObserver(75);
-  StartDriver({scenario, "--range", "10"});
-  StartController("A", 0, {scenario, "--range", "10"});
-  Process& polarimeter = StartPolarimeter(
-      {scenario, "--range", "10", "--rate-hz", "500", "--run-s", "15", "--json"});
-  ASSERT_EQ(polarimeter.Wait(60s), 0) << Logs();
+  StartDriver(with({}));
+  StartController("A", 0, with({}));
+  Process& polarimeter = StartPolarimeter(with({"--lockstep", "--json"}));
+  ASSERT_EQ(polarimeter.Wait(120s), 0) << Logs();
   const nlohmann::json report = LastJsonLine(polarimeter.Log());
   ASSERT_TRUE(report.is_object()) << Logs();
   ASSERT_FALSE(report["lock_time_s"].is_null()) << report.dump(2);
+  EXPECT_TRUE(report["range_criterion"].get<bool>()) << report.dump(2);
   // The loop's steady lag behind 20 rad/s at 500 Hz with step 0.5 is 4.6°.
   EXPECT_LT(report["error_deg"]["p50"].get<double>(), 7.0) << report.dump(2);
+  EXPECT_LT(report["error_deg"]["max"].get<double>(), 20.0) << report.dump(2);
   ASSERT_EQ(report["phi_min"].size(), 3u) << report.dump(2);
   for (int c = 0; c < 3; ++c) {
-    EXPECT_GT(report["phi_min"][c].get<double>(), -9.9) << c << report.dump(2);
-    EXPECT_LT(report["phi_max"][c].get<double>(), 9.9) << c << report.dump(2);
+    EXPECT_GT(report["phi_min"][c].get<double>(), -9.0) << c << report.dump(2);
+    EXPECT_LT(report["phi_max"][c].get<double>(), 9.0) << c << report.dump(2);
   }
 }
 
