@@ -416,17 +416,14 @@ std::vector<SimulationResult> RunBatchFor(std::span<const ClosedLoopSimulator* c
       lane.run.statistics.AddSamples(k + first, lane.sample_period_s, count - first, s_out,
                                      kMaxBatchLanes);
     }
-    // Their controls, four lanes at once.
-    for (int from = 0; from < real; from += 4) {
-      RunStatistics* statistics[4] = {};
-      const int runs = std::min(4, real - from);
-      for (int j = 0; j < runs; ++j) {
-        statistics[j] = &batch.lanes[static_cast<size_t>(from + j)]->run.statistics;
-      }
-      const size_t at = static_cast<size_t>(first) * kMaxBatchLanes + static_cast<size_t>(from);
+    // Their controls, every lane at once.
+    {
+      RunStatistics* statistics[kMaxBatchLanes] = {};
+      for (int l = 0; l < real; ++l) statistics[l] = &batch.lanes[static_cast<size_t>(l)]->run.statistics;
+      const size_t at = static_cast<size_t>(first) * kMaxBatchLanes;
       const double* phi[4] = {buffers->phi_applied[0] + at, buffers->phi_applied[1] + at,
                               buffers->phi_applied[2] + at, buffers->phi_applied[3] + at};
-      RunStatistics::AddControls(statistics, runs, phi, count - first, kMaxBatchLanes);
+      RunStatistics::AddControls(statistics, real, phi, count - first, kMaxBatchLanes);
     }
     tallies.Add(*buffers, first, count, [&](int l) -> Lane<Axes>& {
       return *batch.lanes[static_cast<size_t>(l)];

@@ -102,7 +102,16 @@ class LogHistogram {
   /// sample, four AddBatch calls' worth of arithmetic in one). Row i starts at
   /// values[i·row_stride] (row_stride ≥ 4: the four columns of a wider row).
   static void AddBatchLanes(LogHistogram* const* histograms, int lanes, const double* values,
-                            int count, std::ptrdiff_t row_stride = 4) noexcept;
+                            int count, std::ptrdiff_t row_stride = 4) noexcept {
+    AddBatchColumns<4>(histograms, lanes, values, count, row_stride);
+  }
+  /// The same for eight histograms (lanes ≤ 8, row_stride ≥ 8): one vector of eight doubles a
+  /// row (e.g. one control of a batch's eight trajectories; one AVX-512 register where the build
+  /// has it). Each column's bits equal AddBatchLanes's.
+  static void AddBatchLanes8(LogHistogram* const* histograms, int lanes, const double* values,
+                             int count, std::ptrdiff_t row_stride = 8) noexcept {
+    AddBatchColumns<8>(histograms, lanes, values, count, row_stride);
+  }
 
   /// The estimated percentile of the samples added so far (see the header comment for the
   /// exact definition and accuracy); NaN when there are none. O(number of bins); not for the
@@ -149,12 +158,20 @@ class LogHistogram {
   void AddToSum(double value) noexcept;
   // Four values into four lanes' minimum, maximum and sum, NaNs left out (a comparison with a
   // NaN is false: it keeps the accumulator).
-  [[gnu::always_inline]] static void AccumulateLanes(Lanes value, Lanes* low, Lanes* high,
-                                                     Lanes* sum) noexcept {
+  template <typename V>
+  [[gnu::always_inline]] static void AccumulateLanes(V value, V* low, V* high, V* sum) noexcept {
     *low = value < *low ? value : *low;
     *high = value > *high ? value : *high;
-    *sum += value == value ? value : Splat(0.0);
+    *sum += value == value ? value : V{};
   }
+  // The vectors of AddBatchColumns (GCC ignores a vector_size that depends on a template
+  // parameter).
+  template <int W>
+  struct ColumnVectors;
+  // AddBatchLanes (W = 4) and AddBatchLanes8 (W = 8): W columns, one vector of W doubles a row.
+  template <int W>
+  static void AddBatchColumns(LogHistogram* const* histograms, int lanes, const double* values,
+                              int count, std::ptrdiff_t row_stride) noexcept;
 
   double min_magnitude_;
   double max_magnitude_;
@@ -281,11 +298,27 @@ inline void LogHistogram::AddBatch(const double* values, int count,
   AddToSum(sum);
 }
 
-inline void LogHistogram::AddBatchLanes(LogHistogram* const* histograms, int lanes,
-                                        const double* values, int count,
-                                        std::ptrdiff_t row_stride) noexcept {
+template <>
+struct LogHistogram::ColumnVectors<4> {
+  using Values = double __attribute__((vector_size(32)));
   using Bits = int64_t __attribute__((vector_size(32)));
-  const auto splat = [](int64_t x) { return Bits{x, x, x, x}; };
+  using UnsignedBits = uint64_t __attribute__((vector_size(32)));
+};
+template <>
+struct LogHistogram::ColumnVectors<8> {
+  using Values = double __attribute__((vector_size(64)));
+  using Bits = int64_t __attribute__((vector_size(64)));
+  using UnsignedBits = uint64_t __attribute__((vector_size(64)));
+};
+
+template <int W>
+inline void LogHistogram::AddBatchColumns(LogHistogram* const* histograms, int lanes,
+                                          const double* values, int count,
+                                          std::ptrdiff_t row_stride) noexcept {
+  using Values = typename ColumnVectors<W>::Values;
+  using Bits = typename ColumnVectors<W>::Bits;
+  using UnsignedBits = typename ColumnVectors<W>::UnsignedBits;
+  const auto splat = [](int64_t x) { return Bits{} + x; };
   const LogHistogram& geometry = *histograms[0];
   // As in AddBatch: magnitude bits are below 2^63, signed arithmetic is exact.
   const int shift = geometry.mantissa_shift_;
@@ -294,8 +327,8 @@ inline void LogHistogram::AddBatchLanes(LogHistogram* const* histograms, int lan
   const Bits min_bits = splat(static_cast<int64_t>(geometry.min_magnitude_bits_));
   const Bits infinity = splat(static_cast<int64_t>(kInfinityBits));
   const Bits zero = splat(geometry.zero_index_);
-  uint64_t* bins[4] = {};
-  Lanes low = Splat(INFINITY), high = Splat(-INFINITY), sum = Splat(0.0);
+  uint64_t* bins[W] = {};
+  Values low = Values{} + INFINITY, high = Values{} - INFINITY, sum{};
   for (int c = 0; c < lanes; ++c) {
     bins[c] = histograms[c]->bins_.data();
     low[c] = histograms[c]->min_;
@@ -308,14 +341,14 @@ inline void LogHistogram::AddBatchLanes(LogHistogram* const* histograms, int lan
     const int n = std::min(kChunk, count - start);
     Bits chunk_nans = splat(0);
     for (int i = 0; i < n; ++i) {
-      Lanes value;
+      Values value;
       std::memcpy(&value, values + row_stride * (start + i), sizeof value);
       AccumulateLanes(value, &low, &high, &sum);
       const Bits bits = std::bit_cast<Bits>(value);
       const Bits magnitude = bits & INT64_MAX;
       const Bits nan = magnitude > infinity;  // −1 (all bits) where true
       chunk_nans -= nan;
-      const Bits unclamped = std::bit_cast<Bits>(std::bit_cast<uint64_t __attribute__((vector_size(32)))>(magnitude) >> shift);
+      const Bits unclamped = std::bit_cast<Bits>(std::bit_cast<UnsignedBits>(magnitude) >> shift);
       const Bits key = unclamped < max_key ? unclamped : max_key;
       const Bits offset = (magnitude >= min_bits) & ~nan & (key - min_key + 1);
       index[i] = bits < 0 ? zero - offset : zero + offset;

@@ -69,9 +69,13 @@ void RunStatistics::AddSamples(int64_t first_sample, double sample_period_s, int
 void RunStatistics::AddControls(RunStatistics* const* statistics, int runs,
                                 const double* const* phi, int count, std::ptrdiff_t row_stride) {
   for (int c = 0; c < statistics[0]->control_count_; ++c) {
-    LogHistogram* histograms[4] = {};
+    LogHistogram* histograms[8] = {};
     for (int j = 0; j < runs; ++j) histograms[j] = &statistics[j]->phi_[static_cast<size_t>(c)];
-    LogHistogram::AddBatchLanes(histograms, runs, phi[c], count, row_stride);
+    if (runs > 4) {
+      LogHistogram::AddBatchLanes8(histograms, runs, phi[c], count, row_stride);
+    } else {
+      LogHistogram::AddBatchLanes(histograms, runs, phi[c], count, row_stride);
+    }
   }
 }
 

@@ -144,9 +144,10 @@ class RunStatistics {
   /// lanes).
   void AddSamples(int64_t first_sample, double sample_period_s, int count,
                   const double* const* s_out, std::ptrdiff_t stride);
-  /// Real-time. The controls of `count` samples of up to four runs at once (the lanes of a
-  /// batch), run j's (statistics[j], j < runs ≤ 4, each with control_count ≤ 4) being
-  /// phi[c][i·row_stride + j]: what AddSample gives the control statistics.
+  /// Real-time. The controls of `count` samples of up to eight runs at once (the lanes of a
+  /// batch), run j's (statistics[j], j < runs ≤ 8, each with control_count ≤ 4) being
+  /// phi[c][i·row_stride + j] (row_stride ≥ 4, and ≥ 8 for more than four runs): what
+  /// AddSample gives the control statistics.
   static void AddControls(RunStatistics* const* statistics, int runs, const double* const* phi,
                           int count, std::ptrdiff_t row_stride);
 

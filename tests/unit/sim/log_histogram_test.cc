@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -408,6 +409,55 @@ TEST(LogHistogramBatchTest, AddBatchLanesEqualsAddOneByOnePerColumn) {
       }
     }
     EXPECT_EQ(lane[3].count(), lanes == 4 ? one[3].count() : 0);
+  }
+}
+
+TEST(LogHistogramBatchTest, AddBatchLanes8EqualsAddBatchLanesBitForBitPerColumn) {
+  // Eight columns in one vector: each column's count, extremes, sum and bins are the four-wide
+  // call's exactly (a batch's lanes must equal the scalar simulator's to the bit).
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal(0.0, 2.0);
+  constexpr int kRows = 700;
+  std::vector<double> rows(8 * kRows);
+  for (auto& v : rows) v = normal(rng);
+  rows[8 * 17 + 5] = NAN;
+  rows[8 * 18 + 6] = 0.0;
+  rows[8 * 19 + 4] = -1e-20;
+  rows[8 * 20 + 7] = 1e30;
+  rows[8 * 21 + 7] = -INFINITY;
+  for (int lanes : {5, 8}) {
+    std::vector<LogHistogram> wide(8), narrow(8);
+    LogHistogram* wide_histograms[8] = {};
+    for (int c = 0; c < 8; ++c) wide_histograms[c] = &wide[c];
+    for (int c = 0; c < lanes; ++c) {
+      wide[c].Add(0.25);
+      narrow[c].Add(0.25);
+    }
+    LogHistogram::AddBatchLanes8(wide_histograms, lanes, rows.data(), 500);
+    LogHistogram::AddBatchLanes8(wide_histograms, lanes, rows.data() + 8 * 500, kRows - 500);
+    for (int from = 0; from < lanes; from += 4) {
+      LogHistogram* narrow_histograms[4] = {&narrow[from], &narrow[from + 1], &narrow[from + 2],
+                                            &narrow[from + 3]};
+      const int columns = std::min(4, lanes - from);
+      LogHistogram::AddBatchLanes(narrow_histograms, columns, rows.data() + from, 500, 8);
+      LogHistogram::AddBatchLanes(narrow_histograms, columns, rows.data() + from + 8 * 500,
+                                  kRows - 500, 8);
+    }
+    for (int c = 0; c < 8; ++c) {
+      EXPECT_EQ(wide[c].count(), narrow[c].count()) << c;
+      EXPECT_EQ(wide[c].nan_count(), narrow[c].nan_count()) << c;
+      if (c >= lanes) {
+        EXPECT_EQ(wide[c].count(), 0) << c;
+        continue;
+      }
+      EXPECT_EQ(wide[c].count(), kRows + 1 - (c == 5 ? 1 : 0)) << c;
+      EXPECT_EQ(std::bit_cast<uint64_t>(wide[c].min()), std::bit_cast<uint64_t>(narrow[c].min())) << c;
+      EXPECT_EQ(std::bit_cast<uint64_t>(wide[c].max()), std::bit_cast<uint64_t>(narrow[c].max())) << c;
+      EXPECT_EQ(std::bit_cast<uint64_t>(wide[c].sum()), std::bit_cast<uint64_t>(narrow[c].sum())) << c;
+      for (double p : {0.0, 1.0, 50.0, 99.0, 100.0}) {
+        EXPECT_EQ(wide[c].Percentile(p), narrow[c].Percentile(p)) << c << " " << p;
+      }
+    }
   }
 }
 
