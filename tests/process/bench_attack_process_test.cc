@@ -101,21 +101,29 @@ class BenchAttackTest : public dpc::testing::BenchFixture {
   }
 
   /// Every state since `first` keeps φ in the device's range (±100) and its rates within
-  /// `max_slew_per_s`; consecutive states move φ no faster than that (plus `slack_s` of time).
+  /// `max_slew_per_s`; a state that moves φ moves it no faster than that since the last state
+  /// that moved it (plus `slack_s` of time). The driver limits the slew over its own time
+  /// between two applied commands; states it publishes in between (a rejected command, a
+  /// holding heartbeat) repeat φ and are not where the time counts from.
   void ExpectBounded(size_t first, double max_slew_per_s, double slack_s) {
     const auto states = States();
     ASSERT_GT(states.size(), first);
+    size_t moved = first > 0 ? first - 1 : 0;  // the last state that set φ
     for (size_t i = first; i < states.size(); ++i) {
       const auto& s = states[i].state;
       for (double v : s.phi_applied()) ASSERT_TRUE(std::isfinite(v) && std::abs(v) <= 100.0) << v;
       for (double r : s.phi_rate_per_s()) ASSERT_LE(std::abs(r), max_slew_per_s * (1 + 1e-9)) << r;
       if (i == 0) continue;
       const auto& p = states[i - 1].state;
-      const double dt_s = static_cast<double>(s.publish_time_ns() - p.publish_time_ns()) * 1e-9;
+      if (s.phi_applied() == p.phi_applied()) continue;
+      const auto& m = states[moved].state;
+      const double dt_s = static_cast<double>(s.publish_time_ns() - m.publish_time_ns()) * 1e-9;
       for (size_t k = 0; k < s.phi_applied().size() && k < p.phi_applied().size(); ++k) {
         EXPECT_LE(std::abs(s.phi_applied()[k] - p.phi_applied()[k]), max_slew_per_s * (std::abs(dt_s) + slack_s))
-            << "state " << i << ", control " << k << ", " << dt_s * 1e3 << " ms after the previous";
+            << "state " << i << ", control " << k << ", " << dt_s * 1e3 << " ms after state " << moved
+            << ", the last that moved φ";
       }
+      moved = i;
     }
   }
 
@@ -316,8 +324,11 @@ TEST_F(BenchAttackTest, ACommandClaimingABenchTimeFarAheadMovesNoFasterThanTheSl
     std::this_thread::sleep_for(5ms);
   }
   std::this_thread::sleep_for(200ms);
-  // 20 φ/s on the driver's clock: between two states (publish times, plus 5 ms for the
-  // scheduling of a loaded machine) φ moves by at most 20 · Δt.
+  // The claim is refused where it is made: the time is not the answered sample's.
+  EXPECT_NE(LatestState()->last_rejection().to_string().find("sample_time_ns"), std::string::npos)
+      << LatestState()->last_rejection().to_string();
+  // 20 φ/s on the driver's clock: φ moves by at most 20 · Δt (publish times, plus 5 ms for the
+  // scheduling of a loaded machine).
   ExpectBounded(first, 20.0, 5e-3);
   ExpectDriverExitsCleanly();
 }
