@@ -23,8 +23,17 @@
 
 namespace dpc::testing {
 
+/// A new, empty directory for the running test: its name, and the process id. Never one an
+/// earlier test left (a long suite reuses process ids, and gtest runs a binary's tests in one
+/// process): its driver would start "where the waveplates were left" by another test.
 inline std::string BenchTempDir() {
-  const std::string dir = ::testing::TempDir() + "dpc_bench_process_" + std::to_string(getpid());
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = info != nullptr ? std::string(info->test_suite_name()) + "." + info->name() : "test";
+  for (char& c : name) {
+    if (c == '/') c = '_';  // parameterized tests
+  }
+  const std::string dir = ::testing::TempDir() + "dpc_bench_" + name + "_" + std::to_string(getpid());
+  std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
 }
@@ -109,6 +118,11 @@ class BenchFixture : public ::testing::Test {
     samples_.reset();
     states_.reset();
     participant_.reset();
+    // A failed test's logs, traces and device record stay for a look.
+    if (!HasFailure()) {
+      std::error_code ignored;
+      std::filesystem::remove_all(dir_, ignored);
+    }
   }
 
   Process& Start(const std::string& binary, std::vector<std::string> args, const std::string& name) {
