@@ -17,6 +17,7 @@
 #include "dpc/bus/message_conversion.h"
 #include "dpc/bus/participant_maker.h"
 #include "dpc/config/scenario_validation.h"
+#include "dpc/cli/command_line.h"
 #include "log_limiter.h"
 #include "service.h"
 
@@ -43,7 +44,7 @@ class ControllerService final : public Service {
     app.add_option("--freeze-after-s", s.freeze_after_s,
                    "A gap in the samples longer than this freezes the loop; it re-joins from the "
                    "applied φ when samples resume")
-        ->check(CLI::Range(1e-4, 60.0))->capture_default_str();
+        ->check(cli::NumberIn(1e-4, 60.0))->capture_default_str();
     app.add_option("--predict-mode", o->predict_mode,
                    "With --predict in real time: 'ramp' (commands carry φ̇ from the fitted input "
                    "rotation; the driver moves along it) or 'latency' (aim at the input predicted "
@@ -51,7 +52,7 @@ class ControllerService final : public Service {
                    "does not ramp")
         ->check(CLI::IsMember({"ramp", "latency"}))->capture_default_str();
     app.add_option("--status-period-s", o->status_period_s, "Status publication period")
-        ->check(CLI::Range(1e-3, 10.0))->capture_default_str();
+        ->check(cli::NumberIn(1e-3, 10.0))->capture_default_str();
   }
   static std::string LogName(const Options& o) { return "controller " + o.settings.controller_id; }
 

@@ -20,6 +20,7 @@
 #include "dpc/bus/event_thread_canary.h"
 #include "dpc/bus/message_conversion.h"
 #include "dpc/bus/participant_maker.h"
+#include "dpc/cli/command_line.h"
 #include "dpc/config/scenario_builders.h"
 #include "dpc/config/scenario_validation.h"
 #include "driver_core.h"
@@ -59,7 +60,7 @@ class DriverService final : public Service {
     app.add_option("--max-slew-per-s", s.max_slew_per_s,
                    "Slew-rate limit of every control, φ units per second of the driver's clock (0: "
                    "the device's own limit; a value above it is cut to it)")
-        ->check(CLI::NonNegativeNumber)->capture_default_str();
+        ->check(cli::NonNegativeNumber())->capture_default_str();
     app.add_option("--min-silence-s", s.min_silence_s,
                    "The obeyed controller is dead when another answered a sample it did not and it stayed "
                    "silent this long since (or 1.5 of its command intervals, if longer): fail over. Meanwhile "
@@ -67,19 +68,19 @@ class DriverService final : public Service {
                    "If nobody answers for this long or --silence-intervals of the command interval "
                    "(no samples, no other controller), hold; the controller obeyed before gets "
                    "control back first")
-        ->check(CLI::Range(1e-4, 10.0))->capture_default_str();
+        ->check(cli::NumberIn(1e-4, 10.0))->capture_default_str();
     app.add_option("--silence-intervals", s.silence_intervals, "Silence timeout in command intervals")
-        ->check(CLI::Range(2.0, 1000.0))->capture_default_str();
+        ->check(cli::NumberIn(2.0, 1000.0))->capture_default_str();
     app.add_option("--max-ramp-s", s.max_ramp_s,
                    "A command's rate (phi_rate_per_s) moves the waveplates for at most this long of "
                    "bench time; the next command normally replaces it long before")
-        ->check(CLI::Range(0.0, 1.0))->capture_default_str();
+        ->check(cli::NumberIn(0.0, 1.0))->capture_default_str();
     app.add_option("--device-record", o->device_record,
                    "Where the simulated waveplates' position is kept across driver restarts (a file "
                    "mapped in memory; default /dev/shm/dpc-waveplates-<domain>-<bench>-<id>; none: "
                    "start from the scenario's initial φ every time)");
     app.add_option("--tick-s", o->tick_s, "Shortest interval between the driver's checks for silent controllers")
-        ->check(CLI::Range(1e-5, 0.1))->capture_default_str();
+        ->check(cli::NumberIn(1e-5, 0.1))->capture_default_str();
   }
   static std::string LogName(const Options&) { return "driver"; }
 

@@ -18,6 +18,7 @@
 #include "dpc/bus/event_thread_canary.h"
 #include "dpc/bench/clock.h"
 #include "dpc/bus/recorded_bench.h"
+#include "dpc/cli/command_line.h"
 #include "dpc/cli/run_report.h"
 #include "dpc/sim/trace_header.h"
 #include "dpc/sim/trace_writer.h"
@@ -121,28 +122,28 @@ class PolarimeterService final : public Service {
     app.add_flag("--lockstep", o->bench.lockstep,
                  "Simulated time: wait for the state answering each sample (reproduces dpc sim)");
     app.add_option("--rate-hz", o->bench.rate_hz, "Real time: samples per second")
-        ->check(CLI::Range(1.0, 20000.0))->capture_default_str();
+        ->check(cli::NumberIn(1.0, 20000.0))->capture_default_str();
     app.add_option("--run-s", o->bench.duration_s, "Real time: stop after this long (0: until stopped)")
-        ->check(CLI::NonNegativeNumber)->capture_default_str();
+        ->check(cli::NonNegativeNumber())->capture_default_str();
     app.add_option("--settle-s", o->bench.settle_s,
                    "Real time: error statistics from this long after the first lock, the loop "
                    "latency (bench.loop_latency_us) from this long after the start")
-        ->check(CLI::NonNegativeNumber)->capture_default_str();
+        ->check(cli::NonNegativeNumber())->capture_default_str();
     app.add_option("--lockstep-timeout-s", o->lockstep_timeout_s,
                    "Lockstep: give up when no state answers a sample for this long")
-        ->check(CLI::Range(0.1, 3600.0))->capture_default_str();
+        ->check(cli::NumberIn(0.1, 3600.0))->capture_default_str();
     app.add_option("--trace", o->trace_path, "Write every sample to this CSV trace (dpc sim's format)");
     app.add_flag("--json", o->json, "Print the run's summary as one JSON object (dpc sim's fields)");
     app.add_option("--summary-hz", o->summary_hz,
                    "Summaries of the bench per second on dpc_bench_summary (for dpc dashboard; 0: none)")
-        ->check(CLI::Range(0.0, 100.0))->capture_default_str();
+        ->check(cli::NumberIn(0.0, 100.0))->capture_default_str();
     app.add_option("--input-recording", o->input_recording,
                    "The input SOP of a recorded session (dpc record's .mcap): S_in of its samples, one per "
                    "sample of this bench, in place of the scenario's input; the last one held past its end")
         ->check(CLI::ExistingFile);
     app.add_option("--input-from-s", o->input_from_s,
                    "With --input-recording: start this far into the recording (its bench time)")
-        ->check(CLI::NonNegativeNumber)->capture_default_str();
+        ->check(cli::NonNegativeNumber())->capture_default_str();
   }
   static std::string LogName(const Options&) { return "polarimeter"; }
 

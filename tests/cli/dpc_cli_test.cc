@@ -280,6 +280,14 @@ TEST_F(DpcCliTest, BadFlagsAreRejectedNamingTheFlag) {
   r = Dpc({"sweep", "--rates", "", "--duration-s", "1e-4"});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--rates"), std::string::npos) << r.err;
+  // A rate of NaN was taken (every comparison with it is false) and ran as "rate nan".
+  r = Dpc({"sweep", "--rates", "1e5,nan", "--duration-s", "1e-4"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--rates: 'nan' is not a finite number"), std::string::npos) << r.err;
+  // So was a lock threshold of NaN (the monitor would never have said LOCKED).
+  r = Dpc({"monitor", "--lock-threshold-deg", "nan"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--lock-threshold-deg: 'nan' is not a finite number"), std::string::npos) << r.err;
   for (const char* jobs : {"0", "-3"}) {
     r = Dpc({"sweep", "--jobs", jobs, "--duration-s", "1e-4"});
     EXPECT_EQ(r.exit_code, 2) << jobs;

@@ -20,6 +20,7 @@
 
 #include "bus_tool_support.h"
 #include "calibration.h"
+#include "dpc/cli/command_line.h"
 #include "dpc/cli/scenario_loading.h"
 #include "dpc/config/scenario_builders.h"
 #include "dpc/config/scenario_validation.h"
@@ -377,10 +378,10 @@ CLI::App* AddCalibrateCommand(CLI::App& app, CalibrateOptions* o) {
       ->capture_default_str();
   calibrate->add_option("--readings", o->readings, "SOP pairs per voltage")->check(CLI::Range(3, 1000))->capture_default_str();
   calibrate->add_option("--dwell-s", o->dwell_s, "The readings of a voltage are spread over this long")
-      ->check(CLI::Range(0.0, 10.0))
+      ->check(cli::NumberIn(0.0, 10.0))
       ->capture_default_str();
   calibrate->add_option("--settle-s", o->settle_s, "Wait after setting a voltage")
-      ->check(CLI::Range(0.0, 10.0))
+      ->check(cli::NumberIn(0.0, 10.0))
       ->capture_default_str();
   calibrate->add_option("--reference-v", o->reference_v, "The other channels' voltage during a sweep")
       ->capture_default_str();
@@ -393,14 +394,14 @@ CLI::App* AddCalibrateCommand(CLI::App& app, CalibrateOptions* o) {
                        "Calibrate at each of these temperatures (°C, 2 to 16, comma-separated): each stage's map "
                        "becomes tables keyed by temperature, interpolated at the operating temperature")
           ->delimiter(',')
-          ->check(CLI::Range(-100.0, 200.0));
+          ->check(cli::NumberIn(-100.0, 200.0));
   CLI::Option* wavelengths =
       calibrate
           ->add_option("--wavelengths-nm", o->wavelengths_nm,
                        "Calibrate at each of these wavelengths (nm, 2 to 16, comma-separated): tables keyed by "
                        "wavelength, interpolated in 1/λ at the operating wavelength")
           ->delimiter(',')
-          ->check(CLI::Range(100.0, 10000.0));
+          ->check(cli::NumberIn(100.0, 10000.0));
   temperatures->excludes(wavelengths);
   calibrate
       ->add_option("--condition-command", o->condition_command,
@@ -409,7 +410,7 @@ CLI::App* AddCalibrateCommand(CLI::App& app, CalibrateOptions* o) {
                    "client; without it, dpc calibrate asks at the terminal");
   calibrate->add_option("--condition-settle-s", o->condition_settle_s,
                         "Wait after bringing the device to a condition, before its sweeps")
-      ->check(CLI::Range(0.0, 3600.0))
+      ->check(cli::NumberIn(0.0, 3600.0))
       ->capture_default_str();
   CLI::Option* operating_temperature =
       calibrate->add_option("--operating-temperature-c", o->operating_point,

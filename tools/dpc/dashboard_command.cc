@@ -17,6 +17,7 @@
 #include "target_command.h"
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/message_conversion.h"
+#include "dpc/cli/command_line.h"
 
 #ifndef DPC_DASHBOARD_BUILD_ASSETS
 #define DPC_DASHBOARD_BUILD_ASSETS ""
@@ -249,17 +250,17 @@ CLI::App* AddDashboardCommand(CLI::App& app, DashboardOptions* o) {
                         "and its target control to that network)")
       ->capture_default_str();
   dashboard->add_option("--push-hz", o->push_hz, "Snapshots pushed to the page per second")
-      ->check(CLI::Range(1.0, 60.0))
+      ->check(cli::NumberIn(1.0, 60.0))
       ->capture_default_str();
   dashboard->add_option("--lock-threshold-deg", o->lock_threshold_deg,
                         "LOCKED while the mean error of a push period is below this (degrees)")
-      ->check(CLI::Range(0.0, 180.0))
+      ->check(cli::NumberIn(0.0, 180.0))
       ->capture_default_str();
   dashboard->add_option("--assets", o->assets_dir,
                         "Directory of the page's files (default: $DPC_DASHBOARD_ASSETS, the installed "
                         "share/dpc/dashboard, or the build tree's)");
   dashboard->add_option("--duration-s", o->duration_s, "Stop after this long (0: until SIGINT/SIGTERM)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(cli::NonNegativeNumber())
       ->capture_default_str();
   AddStuckExitOption(*dashboard, &o->stuck_exit_s, " (a supervisor then starts it again)");
   return dashboard;

@@ -22,6 +22,7 @@
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/message_conversion.h"
 #include "dpc/bus/recorded_bench.h"
+#include "dpc/cli/command_line.h"
 #include "dpc/cli/scenario_loading.h"
 #include "dpc/config/scenario_builders.h"
 #include "dpc/config/scenario_validation.h"
@@ -569,9 +570,9 @@ CLI::App* AddEvaluateCommand(CLI::App& app, EvaluateOptions* o) {
                        "Loop delay in samples (default: the recorded session's median)")
       ->check(CLI::Range(int64_t{1}, kMaxDelaySamples));
   evaluate->add_option("--from-s", o->from_s, "Start this far into the recording (bench time)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(cli::NonNegativeNumber());
   evaluate->add_option("--duration-s", o->duration_s, "Evaluate this much of it (0: to the end)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(cli::NonNegativeNumber());
   evaluate->add_option("--scenario", o->scenario_path,
                        "Lock threshold and statistics window (and the device, if none was recorded); default: the "
                        "recording's scenario (dpc record --scenario), else the paper's defaults");
@@ -580,7 +581,7 @@ CLI::App* AddEvaluateCommand(CLI::App& app, EvaluateOptions* o) {
       ->capture_default_str();
   evaluate->add_option("--logs", o->logs_dir, "Keep each run's scenario and service logs in this directory");
   evaluate->add_option("--timeout-s", o->timeout_s, "Give up on a controller after this long")
-      ->check(CLI::Range(1.0, 86400.0))
+      ->check(cli::NumberIn(1.0, 86400.0))
       ->capture_default_str();
   evaluate->add_flag("--json", o->json, "Print one JSON object: the recording's figures and each run's report");
   return evaluate;

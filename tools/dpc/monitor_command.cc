@@ -15,6 +15,7 @@
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/message_conversion.h"
 #include "dpc/config/scenario_builders.h"
+#include "dpc/cli/command_line.h"
 #include "dpc/cli/exit_code.h"
 
 namespace dpc::tools {
@@ -227,11 +228,11 @@ CLI::App* AddMonitorCommand(CLI::App& app, MonitorOptions* o) {
       "monitor", "Live one-line status of a bench: error to target, phi, sample rate, driver mode");
   AddBusToolOptions(*monitor, &o->bus, "The bench to watch");
   monitor->add_option("--rate-hz", o->rate_hz, "Updates per second")
-      ->check(CLI::Range(0.1, 100.0))
+      ->check(cli::NumberIn(0.1, 100.0))
       ->capture_default_str();
   monitor->add_option("--lock-threshold-deg", o->lock_threshold_deg,
                       "LOCKED while the mean error of an update period is below this (degrees)")
-      ->check(CLI::Range(0.0, 180.0))
+      ->check(cli::NumberIn(0.0, 180.0))
       ->capture_default_str();
   monitor->add_option("--width", o->width,
                       "Fit the line to this many columns (default: the terminal's width when redrawing, "
@@ -241,7 +242,7 @@ CLI::App* AddMonitorCommand(CLI::App& app, MonitorOptions* o) {
                     "One line per update instead of redrawing (the default when stdout is not a "
                     "terminal)");
   monitor->add_option("--duration-s", o->duration_s, "Stop after this long (0: until SIGINT/SIGTERM)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(cli::NonNegativeNumber())
       ->capture_default_str();
   return monitor;
 }

@@ -87,7 +87,7 @@ CLI::App* AddRecordCommand(CLI::App& app, RecordOptions* o) {
                      "default or all: every bench topic)")
       ->delimiter(',');
   record->add_option("--duration-s", o->duration_s, "Stop after this long (0: until Ctrl-C / SIGTERM)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(cli::NonNegativeNumber());
   record->add_option("--compression", o->compression, "Chunk compression")
       ->check(CLI::IsMember({"zstd", "lz4", "none"}))
       ->capture_default_str();
@@ -95,7 +95,7 @@ CLI::App* AddRecordCommand(CLI::App& app, RecordOptions* o) {
                      "The bench's scenario file, kept in the recording (metadata \"scenario\")");
   record->add_option("--flush-interval-s", o->flush_interval_s,
                      "Write the chunk being filled at least this often: what a crash can lose at most")
-      ->check(CLI::Range(0.05, 3600.0))
+      ->check(cli::NumberIn(0.05, 3600.0))
       ->capture_default_str();
   record->add_option("--udp-receive-buffer-mib", o->udp_receive_buffer_mib,
                      "The UDP receive buffer to ask for: what arrives while the recorder is not scheduled waits "

@@ -16,6 +16,7 @@
 #include "dpc/bus/bus_participant.h"
 #include "dpc/bus/topics.h"
 #include "dpc/record/mcap.h"
+#include "dpc/cli/command_line.h"
 
 namespace dpc::tools {
 namespace {
@@ -190,7 +191,7 @@ CLI::App* AddReplayCommand(CLI::App& app, ReplayOptions* o) {
   AddBusToolOptions(*replay, &o->bus, nullptr);
   replay->add_option("file", o->input_path, "The recording (.mcap)")->required()->check(CLI::ExistingFile);
   replay->add_option("--rate", o->rate, "Time scale: 2 plays twice as fast, 0.5 half as fast, 0 as fast as possible")
-      ->check(CLI::Range(0.0, 1000.0))
+      ->check(cli::NumberIn(0.0, 1000.0))
       ->capture_default_str();
   replay->add_flag("--loop", o->loop, "Start again at the end, until Ctrl-C");
   replay->add_option("--topics", o->topics,
@@ -198,7 +199,7 @@ CLI::App* AddReplayCommand(CLI::App& app, ReplayOptions* o) {
       ->delimiter(',');
   replay->add_option("--discovery-wait-s", o->discovery_wait_s,
                      "How long to look for a running bench in the domain before publishing")
-      ->check(CLI::Range(0.0, 60.0))
+      ->check(cli::NumberIn(0.0, 60.0))
       ->capture_default_str();
   return replay;
 }

@@ -199,7 +199,7 @@ CLI::App* AddSimCommand(CLI::App& app, SimOptions* o) {
   sim->add_option("--trace", o->trace_path, "Stream a CSV trace of the run to this file");
   sim->add_option("--trace-every", o->trace_every,
                   "Keep every N-th sample in the trace (default: at most ~50k rows)")
-      ->check(CLI::PositiveNumber);
+      ->check(cli::PositiveNumber());
   sim->add_option("--plot", o->plot_path,
                   "Draw the paper-style figure (S_out and each phi_i against time) to this PNG");
   sim->add_flag("--json", o->json, "Print one JSON object with the results");

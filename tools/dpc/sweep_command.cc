@@ -63,7 +63,7 @@ CLI::App* AddSweepCommand(CLI::App& app, SweepOptions* o) {
   o->overrides.AddTo(*sweep);
   sweep->add_option("--rates", o->rates_rad_per_s, "Input rotation rates (rad/s), comma separated")
       ->delimiter(',')
-      ->check(CLI::NonNegativeNumber);
+      ->check(cli::NonNegativeNumber());
   sweep->add_option("--methods", o->methods, "Control laws, comma separated")->delimiter(',');
   sweep->add_option("--seeds", o->seeds, "Seeds: a list and ranges, e.g. 1-10 or 1,2,5-7 (default: the scenario's)");
   sweep->add_option("--devices", o->devices,

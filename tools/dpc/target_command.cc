@@ -12,6 +12,7 @@
 #include "dpc/bench/clock.h"
 #include "dpc/config/scenario_error.h"
 #include "dpc/config/scenario_validation.h"
+#include "dpc/cli/command_line.h"
 #include "dpc/cli/exit_code.h"
 
 namespace dpc::tools {
@@ -53,7 +54,7 @@ CLI::App* AddTargetCommand(CLI::App& app, TargetOptions* o) {
   point->excludes(normal)->excludes(linear);
   normal->excludes(linear);
   target->add_option("--timeout-s", o->timeout_s, "How long to wait for the driver's reply")
-      ->check(CLI::Range(0.1, 600.0))
+      ->check(cli::NumberIn(0.1, 600.0))
       ->capture_default_str();
   return target;
 }

@@ -19,6 +19,7 @@
 
 #include "bus_messages.h"
 #include "dpc/bus/bus_participant.h"
+#include "dpc/cli/command_line.h"
 #include "dpc/cli/exit_code.h"
 
 namespace dpc::tools {
@@ -300,7 +301,7 @@ CLI::App* AddTopicCommand(CLI::App& app, TopicOptions* o) {
       "list", "Discover the topics on a domain: name, type, number of writers and readers");
   AddBusToolOptions(*list, &o->list.bus, nullptr);
   list->add_option("--wait-s", o->list.wait_s, "How long to listen to discovery")
-      ->check(CLI::Range(0.05, 600.0))
+      ->check(cli::NumberIn(0.05, 600.0))
       ->capture_default_str();
   o->list_command = list;
 
@@ -311,11 +312,11 @@ CLI::App* AddTopicCommand(CLI::App& app, TopicOptions* o) {
   AddBusToolOptions(*echo, &o->echo.bus, bench_help);
   echo->add_flag("--json", o->echo.json, "One JSON object per line with every field of the IDL type");
   echo->add_option("--count", o->echo.count, "Exit 0 after this many samples (0: until stopped)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(cli::NonNegativeNumber())
       ->capture_default_str();
   echo->add_option("--timeout-s", o->echo.timeout_s,
                    "Stop after this long; exit 3 if nothing arrived (0: no timeout)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(cli::NonNegativeNumber())
       ->capture_default_str();
   o->echo_command = echo;
 
@@ -324,14 +325,14 @@ CLI::App* AddTopicCommand(CLI::App& app, TopicOptions* o) {
   hz->add_option("topic", o->hz.topic, topic_help)->required();
   AddBusToolOptions(*hz, &o->hz.bus, bench_help);
   hz->add_option("--window-s", o->hz.window_s, "Length of a measurement window")
-      ->check(CLI::Range(0.01, 3600.0))
+      ->check(cli::NumberIn(0.01, 3600.0))
       ->capture_default_str();
   hz->add_option("--count-windows", o->hz.count_windows, "Exit 0 after this many windows (0: until stopped)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(cli::NonNegativeNumber())
       ->capture_default_str();
   hz->add_option("--timeout-s", o->hz.timeout_s,
                  "Exit 3 if no sample arrives within this long (0: wait forever)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(cli::NonNegativeNumber())
       ->capture_default_str();
   hz->add_flag("--json", o->hz.json, "One JSON object per window");
   o->hz_command = hz;

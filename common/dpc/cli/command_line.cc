@@ -1,6 +1,8 @@
 #include "dpc/cli/command_line.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <numeric>
 #include <stdexcept>
 
@@ -152,6 +154,47 @@ std::vector<uint64_t> ParseSeedList(const std::string& text, size_t max_count) {
     start = comma + 1;
   }
   return seeds;
+}
+
+namespace {
+
+/// "" if `text` is a finite number above `lowest` (at or above it when `inclusive`).
+std::string NumberProblem(const std::string& text, double lowest, bool inclusive) {
+  // strtod, not stod: a value beyond double's range is ±inf (said so below), a tiny one its
+  // subnormal or 0, where stod would throw for both.
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size()) return "'" + text + "' is not a number";
+  if (!std::isfinite(value)) return "'" + text + "' is not a finite number";
+  if (inclusive ? value < lowest : value <= lowest) {
+    return fmt::format("'{}' is {} {}", text, inclusive ? "below" : "not above", lowest);
+  }
+  return {};
+}
+
+}  // namespace
+
+const CLI::Validator& NonNegativeNumber() {
+  static const CLI::Validator validator(
+      [](std::string& text) { return NumberProblem(text, 0.0, true); }, "NONNEGATIVE", "NonNegativeNumber");
+  return validator;
+}
+
+const CLI::Validator& PositiveNumber() {
+  static const CLI::Validator validator(
+      [](std::string& text) { return NumberProblem(text, 0.0, false); }, "POSITIVE", "PositiveNumber");
+  return validator;
+}
+
+CLI::Validator NumberIn(double lowest, double highest) {
+  return CLI::Validator(
+      [lowest, highest](std::string& text) -> std::string {
+        if (std::string problem = NumberProblem(text, -INFINITY, true); !problem.empty()) return problem;
+        const double value = std::strtod(text.c_str(), nullptr);
+        if (value < lowest || value > highest) return fmt::format("'{}' is not in [{}, {}]", text, lowest, highest);
+        return {};
+      },
+      fmt::format("FLOAT in [{} - {}]", lowest, highest), "NumberIn");
 }
 
 const CLI::Validator& UnsignedInteger() {

@@ -34,6 +34,16 @@ size_t EditDistance(const std::string& a, const std::string& b);
 /// instead of wrapping to 2^64 − 1 (CLI11 converts it).
 const CLI::Validator& UnsignedInteger();
 
+/// Validators for floating-point options: a finite number ≥ 0 (NonNegativeNumber) or > 0
+/// (PositiveNumber). CLI11's own accept "nan" (every comparison with it is false) and name
+/// their range as "0.000000 to 1797693…" (DBL_MAX written out); these say "'nan' is not a
+/// finite number" or "'-1' is below 0". The help shows NONNEGATIVE / POSITIVE, as CLI11's do.
+const CLI::Validator& NonNegativeNumber();
+const CLI::Validator& PositiveNumber();
+/// A finite number in [lowest, highest] (CLI::Range takes "nan": "'nan' is not a finite number",
+/// "'7' is not in [0.1, 5]"). The help shows "FLOAT in [lowest - highest]", as CLI11's does.
+CLI::Validator NumberIn(double lowest, double highest);
+
 /// Seeds from a list of values and ranges: "3", "1,2,7", "1-10", "1-3,8". Throws
 /// std::invalid_argument naming the bad item (not a non-negative integer, a range whose end is
 /// before its start) or when the list holds more than `max_count` seeds.

@@ -64,6 +64,30 @@ TEST(VersionTextTest, NamesTheProgramTheProjectAndFastDds) {
   EXPECT_NE(text.find("Fast DDS 2."), std::string::npos) << text;
 }
 
+TEST(NumberValidatorTest, TakesFiniteNumbersInRangeAndSaysWhatIsWrongWithTheRest) {
+  const auto problem = [](const CLI::Validator& validator, std::string text) { return validator(text); };
+  for (const char* good : {"0", "0.0", "1e5", "2.5", "1e308"}) {
+    EXPECT_EQ(problem(NonNegativeNumber(), good), "") << good;
+  }
+  for (const char* good : {"1e-300", "1e-320", "3", "0.5"}) EXPECT_EQ(problem(PositiveNumber(), good), "") << good;
+  EXPECT_EQ(problem(NonNegativeNumber(), "nan"), "'nan' is not a finite number");
+  EXPECT_EQ(problem(NonNegativeNumber(), "-inf"), "'-inf' is not a finite number");
+  EXPECT_EQ(problem(NonNegativeNumber(), "1e999"), "'1e999' is not a finite number");  // beyond double's range
+  EXPECT_EQ(problem(NonNegativeNumber(), ""), "'' is not a number");
+  EXPECT_EQ(problem(NonNegativeNumber(), "5x"), "'5x' is not a number");
+  EXPECT_EQ(problem(NonNegativeNumber(), "-1"), "'-1' is below 0");
+  EXPECT_EQ(problem(PositiveNumber(), "0"), "'0' is not above 0");
+  EXPECT_EQ(problem(PositiveNumber(), "NaN"), "'NaN' is not a finite number");
+  const CLI::Validator range = NumberIn(0.1, 600.0);
+  for (const char* good : {"0.1", "600", "5"}) EXPECT_EQ(problem(range, good), "") << good;
+  EXPECT_EQ(problem(range, "nan"), "'nan' is not a finite number");  // CLI::Range takes it
+  EXPECT_EQ(problem(range, "inf"), "'inf' is not a finite number");
+  EXPECT_EQ(problem(range, "0.05"), "'0.05' is not in [0.1, 600]");
+  EXPECT_EQ(problem(range, "601"), "'601' is not in [0.1, 600]");
+  EXPECT_EQ(problem(range, "x"), "'x' is not a number");
+  EXPECT_EQ(range.get_description(), "FLOAT in [0.1 - 600]");
+}
+
 TEST(ParseSeedListTest, TakesValuesAndRanges) {
   EXPECT_EQ(ParseSeedList("3"), (std::vector<uint64_t>{3}));
   EXPECT_EQ(ParseSeedList("1-4"), (std::vector<uint64_t>{1, 2, 3, 4}));
