@@ -25,6 +25,7 @@ using dpc::testing::Eventually;
 using dpc::testing::LastJsonLine;
 using dpc::testing::Process;
 using dpc::testing::SeenState;
+using dpc::testing::Slurp;
 using namespace std::chrono_literals;
 
 class BenchLoopTest : public dpc::testing::BenchFixture {};
@@ -129,10 +130,7 @@ TEST_F(BenchLoopTest, TheRangeCriterionKeepsASlowBenchsChannelsInsideTheirRanges
   // channel inside: down to -8.3 V, max error 11.9°. (In real time the trajectory depends on
   // the timing; over 60 seeds of dpc sim the criterion still touched a limit in 2.)
   const std::string source = std::string(DPC_SOURCE_DIR) + "/deploy/scenarios/emulator_epc.pbtxt";
-  std::ifstream in(source);
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string scenario_text = text.str();
+  std::string scenario_text = Slurp(source);
   // The dithering baseline's reset lasts at least one sample: one sample at 500 Hz.
   const std::string reset = "reset_duration_s: 1e-4";
   const size_t at = scenario_text.find(reset);

@@ -20,23 +20,13 @@
 #include "dpc/bench/clock.h"
 #include "dpc/bus/bus_participant.h"
 #include "support/process.h"
+#include "support/test_directory.h"
 
 namespace dpc::testing {
 
-/// A new, empty directory for the running test: its name, and the process id. Never one an
-/// earlier test left (a long suite reuses process ids, and gtest runs a binary's tests in one
-/// process): its driver would start "where the waveplates were left" by another test.
-inline std::string BenchTempDir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::string name = info != nullptr ? std::string(info->test_suite_name()) + "." + info->name() : "test";
-  for (char& c : name) {
-    if (c == '/') c = '_';  // parameterized tests
-  }
-  const std::string dir = ::testing::TempDir() + "dpc_bench_" + name + "_" + std::to_string(getpid());
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
-}
+/// The running test's own directory: never one an earlier test left, whose driver record would
+/// start this test's driver "where the waveplates were left" by another test.
+inline std::string BenchTempDir() { return FreshTestDirectory("dpc_bench").string(); }
 
 /// One applied state as seen by the test.
 struct SeenState {

@@ -13,17 +13,14 @@
 #include <vector>
 
 #include "support/process.h"
+#include "support/test_directory.h"
 
 namespace dpc::testing {
 
 class CommandLineTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = std::filesystem::temp_directory_path() /
-           ("dpc_" + std::string(info->test_suite_name()) + "_" + info->name() + "_" + std::to_string(getpid()));
-    std::filesystem::remove_all(dir_);
-    std::filesystem::create_directories(dir_);
+    dir_ = FreshTestDirectory("dpc");
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
 
