@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <numeric>
 #include <stdexcept>
 
@@ -158,41 +159,44 @@ std::vector<uint64_t> ParseSeedList(const std::string& text, size_t max_count) {
 
 namespace {
 
-/// "" if `text` is a finite number above `lowest` (at or above it when `inclusive`).
-std::string NumberProblem(const std::string& text, double lowest, bool inclusive) {
-  // strtod, not stod: a value beyond double's range is ±inf (said so below), a tiny one its
-  // subnormal or 0, where stod would throw for both.
-  char* end = nullptr;
-  const double value = std::strtod(text.c_str(), &end);
-  if (text.empty() || end != text.c_str() + text.size()) return "'" + text + "' is not a number";
-  if (!std::isfinite(value)) return "'" + text + "' is not a finite number";
-  if (inclusive ? value < lowest : value <= lowest) {
-    return fmt::format("'{}' is {} {}", text, inclusive ? "below" : "not above", lowest);
-  }
-  return {};
+/// A validator of finite numbers: `bound_problem` says what is wrong with a finite value ("" if
+/// nothing), given the text as typed.
+CLI::Validator FiniteNumber(std::function<std::string(const std::string&, double)> bound_problem,
+                            const std::string& description, const std::string& name) {
+  return CLI::Validator(
+      [bound_problem = std::move(bound_problem)](std::string& text) -> std::string {
+        // strtod, not stod: a value beyond double's range is ±inf (said so below), a tiny one
+        // its subnormal or 0, where stod would throw for both.
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        if (text.empty() || end != text.c_str() + text.size()) return "'" + text + "' is not a number";
+        if (!std::isfinite(value)) return "'" + text + "' is not a finite number";
+        return bound_problem(text, value);
+      },
+      description, name);
 }
 
 }  // namespace
 
 const CLI::Validator& NonNegativeNumber() {
-  static const CLI::Validator validator(
-      [](std::string& text) { return NumberProblem(text, 0.0, true); }, "NONNEGATIVE", "NonNegativeNumber");
+  static const CLI::Validator validator = FiniteNumber(
+      [](const std::string& text, double value) { return value < 0.0 ? "'" + text + "' is below 0" : ""; },
+      "NONNEGATIVE", "NonNegativeNumber");
   return validator;
 }
 
 const CLI::Validator& PositiveNumber() {
-  static const CLI::Validator validator(
-      [](std::string& text) { return NumberProblem(text, 0.0, false); }, "POSITIVE", "PositiveNumber");
+  static const CLI::Validator validator = FiniteNumber(
+      [](const std::string& text, double value) { return value <= 0.0 ? "'" + text + "' is not above 0" : ""; },
+      "POSITIVE", "PositiveNumber");
   return validator;
 }
 
 CLI::Validator NumberIn(double lowest, double highest) {
-  return CLI::Validator(
-      [lowest, highest](std::string& text) -> std::string {
-        if (std::string problem = NumberProblem(text, -INFINITY, true); !problem.empty()) return problem;
-        const double value = std::strtod(text.c_str(), nullptr);
-        if (value < lowest || value > highest) return fmt::format("'{}' is not in [{}, {}]", text, lowest, highest);
-        return {};
+  return FiniteNumber(
+      [lowest, highest](const std::string& text, double value) {
+        return value < lowest || value > highest ? fmt::format("'{}' is not in [{}, {}]", text, lowest, highest)
+                                                 : std::string();
       },
       fmt::format("FLOAT in [{} - {}]", lowest, highest), "NumberIn");
 }
