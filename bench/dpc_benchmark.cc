@@ -8,7 +8,8 @@
 // one trajectory (Simulator/gp) ≥ 25 M samples/s for 4 stages (must ≥ 20 M), batches in SIMD
 // lanes on one core (Simulator/batch-avx2 ≥ 60 M, Simulator/batch-avx512 ≥ 100 M) and a sweep on
 // every core (Sweep/all-cores, wall time, ≥ 180 M). Both ControlLoop/gp and ControlLoop/gp-general
-// and the simulator with its general loop print there.
+// and the simulator with its general loop print there, and a batch's time split into its kernel
+// alone (BatchKernel) and the rest.
 
 #include <Eigen/SVD>
 #include <benchmark/benchmark.h>
@@ -256,8 +257,9 @@ void BM_Simulator(benchmark::State& state) {
 }
 
 // Batches of the paper scenario (one seed per lane) on one core; reports samples per second of
-// all lanes together. Arg 1: the instruction set (1 AVX2, 2 AVX-512).
-void BM_SimulatorBatch(benchmark::State& state) {
+// all lanes together. Arg 1: the instruction set (1 AVX2, 2 AVX-512). `parts`: the whole run, or
+// the kernel alone (BatchParts::kKernelOnly: no statistics, no normal draws after the first block).
+void RunSimulatorBatch(benchmark::State& state, BatchParts parts) {
   const int stages = static_cast<int>(state.range(0));
   const BatchIsa isa = state.range(1) == 2 ? BatchIsa::kAvx512 : BatchIsa::kAvx2;
   if (DetectBatchIsa() < isa) {
@@ -276,13 +278,15 @@ void BM_SimulatorBatch(benchmark::State& state) {
   }
   int64_t samples = 0;
   for (auto _ : state) {
-    const std::vector<SimulationResult> results = RunBatch(lanes, isa);
+    const std::vector<SimulationResult> results = RunBatch(lanes, isa, parts);
     for (const SimulationResult& r : results) samples += r.summary.samples;
-    benchmark::DoNotOptimize(results.front().summary.error_deg.mean);
+    benchmark::DoNotOptimize(results.front().final_phi[0]);
   }
   state.counters["samples_per_s"] =
       benchmark::Counter(static_cast<double>(samples), benchmark::Counter::kIsRate);
 }
+void BM_SimulatorBatch(benchmark::State& state) { RunSimulatorBatch(state, BatchParts::kAll); }
+void BM_BatchKernel(benchmark::State& state) { RunSimulatorBatch(state, BatchParts::kKernelOnly); }
 
 // The simulator's statistics alone (RunStatistics::AddSample and its batched Flush), in samples
 // per second: a locked output wandering ~0.1° around the paper's target and `controls` slowly
@@ -396,6 +400,14 @@ void RegisterAll() {
       ->Args({4, 1})
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("Simulator/batch-avx512", BM_SimulatorBatch)
+      ->Args({3, 2})
+      ->Args({4, 2})
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("BatchKernel/avx2", BM_BatchKernel)
+      ->Args({3, 1})
+      ->Args({4, 1})
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("BatchKernel/avx512", BM_BatchKernel)
       ->Args({3, 2})
       ->Args({4, 2})
       ->Unit(benchmark::kMillisecond);
@@ -589,6 +601,23 @@ void PrintSummary(const std::map<std::string, CollectingReporter::Entry>& e) {
     fmt::print("  the statistics alone, {} stages:   {:6.2f} M samples/s on one core (the most any "
                "batch can reach)\n",
                stages, statistics->samples_per_s / 1e6);
+  }
+  // A batch's time split in two: the kernel alone (BatchParts::kKernelOnly) and the rest (the
+  // lanes' normal draws, statistics and update tallies), in ns per trajectory-sample, beside what
+  // the goal leaves the rest.
+  for (int stages : {4, 3}) {
+    for (const auto& [isa, arg, goal] : {std::tuple{"avx2", 1, 60e6}, std::tuple{"avx512", 2, 100e6}}) {
+      const auto* batch = find(fmt::format("Simulator/batch-{}/{}/{}", isa, stages, arg));
+      const auto* kernel = find(fmt::format("BatchKernel/{}/{}/{}", isa, stages, arg));
+      if (!batch || !kernel || batch->samples_per_s <= 0 || kernel->samples_per_s <= 0) continue;
+      const double kernel_ns = 1e9 / kernel->samples_per_s, batch_ns = 1e9 / batch->samples_per_s;
+      fmt::print("  {:<6} batch, {} stages: {:.2f} ns a trajectory-sample = the kernel alone {:.2f} ns "
+                 "({:.1f} M/s) + the rest {:.2f} ns{}\n",
+                 isa, stages, batch_ns, kernel_ns, kernel->samples_per_s / 1e6, batch_ns - kernel_ns,
+                 stages == 4 ? fmt::format("; >= {:.0f} M leaves the rest {:.2f} ns", goal / 1e6,
+                                           1e9 / goal - kernel_ns)
+                             : "");
+    }
   }
   for (int stages : {4, 3}) {
     const auto* sweep = find(fmt::format("Sweep/all-cores/{}/real_time", stages));

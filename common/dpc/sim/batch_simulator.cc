@@ -260,7 +260,7 @@ class LaneUpdateTallies {
 
 template <typename Axes>
 std::vector<SimulationResult> RunBatchFor(std::span<const ClosedLoopSimulator* const> simulators,
-                                          BatchIsa isa, const Axes& axes) {
+                                          BatchIsa isa, BatchParts parts, const Axes& axes) {
   constexpr int N = Axes::kStages;
   const int width = BatchLanesOf(isa);
   const ClosedLoopSimulator& first = *simulators[0];
@@ -353,10 +353,11 @@ std::vector<SimulationResult> RunBatchFor(std::span<const ClosedLoopSimulator* c
   block.normals = buffers->normals;
 
   const int real = static_cast<int>(batch.lanes.size());
+  const bool kernel_only = parts == BatchParts::kKernelOnly;
   LaneUpdateTallies tallies;
   for (int64_t k = 0; k < total;) {
     const int count = static_cast<int>(std::min<int64_t>(kBatchBlock, total - k));
-    if (lanes.vector_input) {
+    if (lanes.vector_input && (k == 0 || !kernel_only)) {
       // The kicks' normal draws, lane by lane from each lane's stream (none at sample 0).
       for (int l = 0; l < width; ++l) {
         if (!batch.Real(l)) {
@@ -406,6 +407,10 @@ std::vector<SimulationResult> RunBatchFor(std::span<const ClosedLoopSimulator* c
     block.first_sample = k;
     block.count = count;
     kernel(lanes, block);
+    if (kernel_only) {
+      k += count;
+      continue;
+    }
     // The statistics of the true output (each lane's block at once) and of the updates.
     const int first = std::max<int>(0, static_cast<int>(std::min<int64_t>(count, activation - k)));
     for (int l = 0; l < real; ++l) {
@@ -444,7 +449,7 @@ std::vector<SimulationResult> RunBatchFor(std::span<const ClosedLoopSimulator* c
 }  // namespace
 
 std::vector<SimulationResult> RunBatch(std::span<const ClosedLoopSimulator* const> simulators,
-                                       BatchIsa isa) {
+                                       BatchIsa isa, BatchParts parts) {
   if (isa == BatchIsa::kNone || simulators.empty() ||
       simulators.size() > static_cast<size_t>(BatchLanesOf(isa))) {
     throw std::invalid_argument("RunBatch: 1 to " + std::to_string(BatchLanesOf(isa)) +
@@ -459,7 +464,7 @@ std::vector<SimulationResult> RunBatch(std::span<const ClosedLoopSimulator* cons
   }
   const FusedUpdatePlan& plan = *simulators[0]->fast_path_plan();
   return DispatchStageAxes(plan.axis, plan.stages, [&](const auto& axes) {
-    return RunBatchFor(simulators, isa, axes);
+    return RunBatchFor(simulators, isa, parts, axes);
   });
 }
 

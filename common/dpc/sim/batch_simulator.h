@@ -45,10 +45,16 @@ std::optional<BatchKey> BatchKeyOf(const ClosedLoopSimulator& simulator);
 /// Whether the two simulators' runs may be lanes of one batch: both have a BatchKeyOf, the same.
 bool CanShareBatch(const ClosedLoopSimulator& a, const ClosedLoopSimulator& b);
 
+/// What a batch computes. kAll is a run. kKernelOnly measures where a batch's time goes
+/// (dpc_benchmark): the kernel with its callbacks (exact poses, near-singular solves) on the
+/// lanes' inputs, but neither the statistics nor the update tallies, and the paper scrambler's
+/// normal draws of the first block reused in every block; its results' statistics are empty.
+enum class BatchParts { kAll, kKernelOnly };
+
 /// Runs the simulators (1 … BatchLanesOf(isa) of them, pairwise CanShareBatch; isa not kNone),
 /// one per lane; their results in order. Each equals simulator.Run() without an observer.
 /// Throws std::invalid_argument if they cannot share a batch.
 std::vector<SimulationResult> RunBatch(std::span<const ClosedLoopSimulator* const> simulators,
-                                       BatchIsa isa);
+                                       BatchIsa isa, BatchParts parts = BatchParts::kAll);
 
 }  // namespace dpc

@@ -124,6 +124,38 @@ TEST(BatchSimulatorTest, ALaneNearASingularityTakesTheScalarFallback) {
   ExpectLanesEqualScalarRuns(scenarios);
 }
 
+// The kernel alone (what dpc_benchmark's BatchKernel measures) does a run's control work: without
+// the scrambler's kicks (no normal draws to reuse) its lanes end at the run's φ, bit for bit, and
+// it keeps no statistics.
+TEST(BatchSimulatorTest, TheKernelAloneTakesTheRunsTrajectoryAndKeepsNoStatistics) {
+  const std::vector<BatchIsa> isas = AvailableIsas();
+  if (isas.empty()) GTEST_SKIP() << "this processor has neither AVX2 nor AVX-512";
+  std::vector<ScenarioConfig> scenarios = Mixed("3131");
+  scenarios.resize(4);
+  for (ScenarioConfig& s : scenarios) s.input.disturbances[0].kick_rms_ratio = 0.0;
+  std::vector<std::unique_ptr<ClosedLoopSimulator>> simulators;
+  std::vector<const ClosedLoopSimulator*> lanes;
+  for (const ScenarioConfig& s : scenarios) {
+    simulators.push_back(std::make_unique<ClosedLoopSimulator>(s));
+    lanes.push_back(simulators.back().get());
+  }
+  for (BatchIsa isa : isas) {
+    SCOPED_TRACE(BatchIsaName(isa));
+    const std::vector<SimulationResult> run = RunBatch(lanes, isa);
+    const std::vector<SimulationResult> kernel = RunBatch(lanes, isa, BatchParts::kKernelOnly);
+    ASSERT_EQ(kernel.size(), run.size());
+    for (size_t l = 0; l < run.size(); ++l) {
+      ASSERT_GT(run[l].summary.statistics_samples, 0);
+      EXPECT_EQ(kernel[l].summary.statistics_samples, 0);
+      EXPECT_EQ(kernel[l].summary.updates, 0);
+      ASSERT_EQ(kernel[l].final_phi.size(), run[l].final_phi.size());
+      for (Eigen::Index e = 0; e < run[l].final_phi.size(); ++e) {
+        EXPECT_SAME_BITS(kernel[l].final_phi[e], run[l].final_phi[e]);
+      }
+    }
+  }
+}
+
 TEST(BatchSimulatorTest, RunsThatCannotShareABatchAreRefused) {
   const std::vector<BatchIsa> isas = AvailableIsas();
   if (isas.empty()) GTEST_SKIP() << "this processor has neither AVX2 nor AVX-512";
