@@ -104,8 +104,16 @@ class BenchSecurityTest : public dpc::testing::BenchFixture {
     // can stall for good (both discovered each other, neither ever reports the other
     // authenticated; seen about once in twenty starts of this fixture). The starved service
     // then makes its participant again by itself after about 4 s (bus::HandshakeWatchdog):
-    // the bench locks within 40 s, and the test says when that happened.
-    ASSERT_TRUE(Eventually([&] { return AppliedBy("main") > 200; }, 40s)) << Logs();
+    // the bench locks within 40 s, and the test says when that happened. A stall between a
+    // working service and the test's observer, which the service does not heal, the observer
+    // heals (seen once in 17 starts: the driver obeyed main, the observer saw no state in 40 s).
+    ASSERT_TRUE(Eventually(
+        [&] {
+          HealObserverStall();
+          return AppliedBy("main") > 200;
+        },
+        40s))
+        << Logs();
     NoteHandshakeStallReloads();
   }
 
@@ -412,9 +420,35 @@ TEST_F(BenchSecurityTest, AReloadTriesAnotherNewParticipantWhenTheFirstMissesAPe
   // Back, the controller is a peer whose lease the others let expire: one that still holds its
   // side of the old handshake (the polarimeter's, say) makes its participant again to be
   // handshaken afresh (HandshakeWatchdog::JudgeReturning), and the bench locks again.
+  // The controller resumes with every peer's lease expired and the driver's old participant's
+  // dispose waiting in its socket: both at once can deadlock its participant (Fast DDS 2.9, see
+  // bus/event_thread_canary.h; seen once in many runs). Its loop guard then ends it, naming the
+  // event thread, for a supervisor to restart it (compose's restart policy): the test does what
+  // the supervisor would, once, and says so. Any other end of a service fails the test.
   controller.Signal(SIGCONT);
   const int64_t resumed_ns = MonotonicNs();
-  EXPECT_TRUE(Eventually([&] { return SoonObeys("main", 100ms); }, 30s)) << Logs();
+  const std::string stuck = "stuck: the event thread of its DDS participant";
+  std::string unexpected_end;
+  bool restarted = false;
+  EXPECT_TRUE(Eventually(
+      [&] {
+        for (const auto& p : processes_) {
+          if (!unexpected_end.empty() || (restarted && p.get() == &controller) || p->running()) continue;
+          if (restarted || p.get() != &controller || controller.Log().find(stuck) == std::string::npos) {
+            unexpected_end = p->out_path().string();
+            continue;
+          }
+          restarted = true;
+          std::printf("the controller ended itself %.1f s after it resumed (its event thread stuck); restarted\n",
+                      (MonotonicNs() - resumed_ns) * 1e-9);
+          Start(DPC_CONTROLLER_BINARY, {"--id", "main", "--priority", "10"}, "controller_main_restarted");
+          break;  // processes_ grew
+        }
+        return !unexpected_end.empty() || SoonObeys("main", 100ms);
+      },
+      30s))
+      << Logs();
+  EXPECT_EQ(unexpected_end, "") << "a service ended: " << Logs();
   std::printf("main obeyed again %.1f s after it resumed\n", (MonotonicNs() - resumed_ns) * 1e-9);
   for (const auto& p : processes_) {
     if (p->Log().find("back after its lease had expired") != std::string::npos) {
