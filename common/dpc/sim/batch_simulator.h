@@ -46,9 +46,11 @@ std::optional<BatchKey> BatchKeyOf(const ClosedLoopSimulator& simulator);
 bool CanShareBatch(const ClosedLoopSimulator& a, const ClosedLoopSimulator& b);
 
 /// What a batch computes. kAll is a run. kKernelOnly measures where a batch's time goes
-/// (dpc_benchmark): the kernel with its callbacks (exact poses, near-singular solves) on the
-/// lanes' inputs, but neither the statistics nor the update tallies, and the paper scrambler's
-/// normal draws of the first block reused in every block; its results' statistics are empty.
+/// (dpc_benchmark's BatchKernel): the kernel with its callbacks (exact poses, near-singular
+/// solves, noisy polarimeters), but neither the statistics nor the update tallies; the paper
+/// scrambler's normal draws of the first block are reused in every block (other inputs are
+/// still generated block by block). Its results keep no statistics; their final φ is the run's
+/// when the input draws nothing.
 enum class BatchParts { kAll, kKernelOnly };
 
 /// Runs the simulators (1 … BatchLanesOf(isa) of them, pairwise CanShareBatch; isa not kNone),
