@@ -73,6 +73,10 @@ class EmulatorService final : public Service {
     // The emulator speaks no DDS: the skeleton's DDS options would be taken and ignored.
     for (const char* dds : {"--domain", "--security-dir", "--identity"}) app.remove_option(app.get_option(dds));
     app.get_option("--bench-id")->description("A label for the log lines (the emulator publishes nothing)");
+    app.get_option("--stuck-exit-s")
+        ->description("Exit with code 1, saying where, when the emulator's loop has not turned for this long (a "
+                      "call that never returns), so that a supervisor restarts it; raised to what the emulator's "
+                      "own timeouts need. 0: never");
     app.get_option("SCENARIO")
         ->description("Scenario file of the TRUE device (text format, common/proto/dpc/scenario.proto): its stages "
                       "and maps with φ = the channel's voltage in volts, its input SOP (stepped at "

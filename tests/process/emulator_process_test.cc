@@ -266,6 +266,13 @@ TEST_F(EmulatorProcessTest, RefusesBadOptionsAndScenariosAndAPortInUse) {
   EXPECT_NE(rate_log.find("simulation.sample_rate_hz"), std::string::npos) << rate_log;
   EXPECT_NE(rate_log.find("(set by --sample-rate-hz)"), std::string::npos) << rate_log;
 
+  // Its help speaks of no DDS participant, which it does not have (but for the version of the library linked).
+  auto help = Start({"--help"}, "help");
+  EXPECT_EQ(help->Wait(20s), 0) << help->err();
+  const std::string help_text = help->out();
+  EXPECT_NE(help_text.find("when the emulator's loop has not turned"), std::string::npos) << help_text;
+  EXPECT_EQ(help_text.find("participant"), std::string::npos) << help_text;
+
   // A port another emulator holds: cannot start (4), naming the option.
   const auto first = Start({"--tcp-port-epc", "0", "--tcp-port-polarimeter", "0", "--control-port", "0"}, "first");
   const nlohmann::json ready = Ready(*first);
