@@ -285,7 +285,8 @@ class DriverService final : public Service {
     std::lock_guard<std::mutex> lock(mutex_);
     // One polarimeter: samples of another participant (numbered near 2⁶⁴, say) would make every
     // real one look like a new run and every command answer an unknown sample (SourceBinding).
-    if (!sample_source_.Accept(bus::SourceOf(info), MonotonicNs())) {
+    if (!sample_source_.Accept(bus::SourceOf(info), MonotonicNs(),
+                               [this](const SourceId& bound) { return participant_->HasLeft(bound); })) {
       log_.Log(spdlog::level::warn, "foreign sample", sample_source_.Refusal("sample", "polarimeter"));
       return;
     }

@@ -11,6 +11,9 @@
 // driver publishes a state at least every holding heartbeat, 5 ms; the polarimeter a sample per
 // period): a driver or polarimeter restarted after kill -9 is a new participant, and it is taken
 // as soon as the old one has been quiet that long, without waiting for its DDS lease to expire.
+// It is released at once when the service's discovery says the bound source has left (a driver
+// reloaded for new credentials moves to a new participant and deletes the old one): the caller
+// passes that test to Accept, which asks it only of a message it would otherwise refuse.
 // What this cannot do on an open domain: tell a forger who speaks first, or who speaks while the
 // real source is silent, from the real source. The services report every refused source; a
 // bench reachable by untrusted peers runs with DDS Security.
@@ -52,7 +55,8 @@ class SourceBinding {
       return true;
     }
     if (!bound_ || now_ns - last_heard_ns_ > release_after_ns_) {
-      if (bound_) ++rebinds_;
+      if (bound_ || released_) ++rebinds_;
+      released_ = false;
       bound_ = true;
       source_ = source;
       last_heard_ns_ = now_ns;
@@ -63,13 +67,29 @@ class SourceBinding {
     return false;
   }
 
+  /// Accept, but first, for a message it would refuse, asks `has_left(bound source)` (e.g. the
+  /// participant's BusParticipant::HasLeft): a bound source that left is released, and
+  /// `source` taken at once.
+  template <typename HasLeft>
+  bool Accept(const SourceId& source, int64_t now_ns, HasLeft&& has_left) {
+    if (bound_ && source != source_ && now_ns - last_heard_ns_ <= release_after_ns_ && has_left(source_)) Release();
+    return Accept(source, now_ns);
+  }
+
+  /// Forgets the bound source (it left): the next message's source is taken, as a rebind.
+  void Release() {
+    if (!bound_) return;
+    bound_ = false;
+    released_ = true;
+  }
+
   bool bound() const { return bound_; }
   const SourceId& source() const { return source_; }
   /// Messages refused from other sources.
   uint64_t refused() const { return refused_; }
   /// The source of the latest refused message.
   const SourceId& last_refused() const { return last_refused_; }
-  /// Times the binding moved to a new source after the bound one fell silent.
+  /// Times the binding moved to a new source after the bound one fell silent or left.
   uint64_t rebinds() const { return rebinds_; }
 
   /// What the latest refusal was, for logs and status: "<what> from participant <refused>
@@ -82,6 +102,7 @@ class SourceBinding {
  private:
   int64_t release_after_ns_;
   bool bound_ = false;
+  bool released_ = false;  ///< the bound source left (Release): the next binding is a rebind
   SourceId source_{};
   int64_t last_heard_ns_ = 0;
   uint64_t refused_ = 0;

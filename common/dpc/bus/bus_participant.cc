@@ -127,6 +127,7 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
       std::lock_guard<std::mutex> lock(mutex_);
       if (info.status == Status::DISCOVERED_PARTICIPANT || info.status == Status::CHANGED_QOS_PARTICIPANT) {
         if (names_.size() < kMaxNames || names_.count(prefix) != 0) names_[prefix] = name;
+        left_.erase(prefix);
         if (info.status == Status::CHANGED_QOS_PARTICIPANT) return;
         // Its handshake begins (unless its outcome came first: another thread of Fast DDS's).
         if (secure_ && settled_.count(prefix) == 0 && pending_.size() < kMaxNames) {
@@ -144,6 +145,8 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
         }
         settled_.erase(prefix);
         authenticated_.erase(prefix);
+        if (left_.size() >= kMaxNames) left_.clear();  // forgetting only delays a rebinding
+        left_.insert(prefix);
         kind = PeerEvent::Kind::kGone;
       }
     }
@@ -202,6 +205,10 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
     for (const auto& prefix : authenticated_) peers.push_back(SourceName(SourceOf(prefix)));
     return peers;
   }
+  bool HasLeft(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return left_.count(prefix) != 0;
+  }
   std::vector<std::string> PendingHandshakes(int64_t older_than_ns, bool returning_only) const {
     const int64_t now_ns = MonotonicNs();
     std::vector<std::string> peers;
@@ -235,6 +242,9 @@ class BusParticipant::DiscoveryListener : public fdds::DomainParticipantListener
   /// Secure only: authenticated participants whose lease expired, until they come back.
   /// Bounded by kMaxNames.
   std::set<eprosima::fastrtps::rtps::GuidPrefix_t> dropped_;
+  /// Participants reported gone (left or lease expired), until discovered again (HasLeft).
+  /// Bounded by kMaxNames: emptied when full.
+  std::set<eprosima::fastrtps::rtps::GuidPrefix_t> left_;
 };
 
 std::string PrintableName(const std::string& name) {
@@ -385,6 +395,8 @@ BusParticipant::BusParticipant(const BusOptions& options, std::function<void(con
 }
 
 std::vector<std::string> BusParticipant::AuthenticatedPeers() const { return discovery_->AuthenticatedPeers(); }
+
+bool BusParticipant::HasLeft(const SourceId& source) const { return discovery_->HasLeft(PrefixOf(source)); }
 
 std::string BusParticipant::guid_prefix() const { return SourceName(SourceOf(participant_->guid().guidPrefix)); }
 

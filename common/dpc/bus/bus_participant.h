@@ -363,6 +363,12 @@ inline SourceId SourceOf(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix) {
   for (size_t i = 0; i < id.size(); ++i) id[i] = prefix.value[i];
   return id;
 }
+/// The GUID prefix of a SourceId (SourceOf's inverse).
+inline eprosima::fastrtps::rtps::GuidPrefix_t PrefixOf(const SourceId& id) {
+  eprosima::fastrtps::rtps::GuidPrefix_t prefix;
+  for (size_t i = 0; i < id.size(); ++i) prefix.value[i] = id[i];
+  return prefix;
+}
 /// The participant that wrote a received sample.
 inline SourceId SourceOf(const eprosima::fastdds::dds::SampleInfo& info) {
   return SourceOf(info.sample_identity.writer_guid().guidPrefix);
@@ -455,6 +461,12 @@ class BusParticipant {
   /// With DDS Security: the remote participants authenticated (and not gone since), as GUID
   /// prefixes written as SourceName writes them. Empty on an open participant.
   std::vector<std::string> AuthenticatedPeers() const;
+
+  /// Whether discovery reported the remote participant `source` gone (it left, or its lease
+  /// expired) and has not discovered it since: what lets a service take a new source at once
+  /// when the one it is bound to has left (SourceBinding). False for a participant never seen,
+  /// and possibly for one gone among more than 4096 others since (the record is bounded).
+  bool HasLeft(const SourceId& source) const;
 
   /// This participant's GUID prefix, written as SourceName writes it.
   std::string guid_prefix() const;

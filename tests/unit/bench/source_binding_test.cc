@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <vector>
+
 namespace dpc {
 namespace {
 
@@ -53,6 +55,37 @@ TEST(SourceBindingTest, RefusedMessagesDoNotKeepTheBindingAliveNorTakeIt) {
   EXPECT_TRUE(binding.Accept(Source(1), 100 * kMs));
   EXPECT_FALSE(binding.Accept(Source(2), 150 * kMs));
   EXPECT_EQ(binding.source(), Source(1));
+}
+
+TEST(SourceBindingTest, ASourceThatLeftIsReplacedAtOnceAndOnlyIt) {
+  SourceBinding binding(100 * kMs);
+  std::vector<SourceId> asked;
+  bool left = false;
+  const auto has_left = [&](const SourceId& source) {
+    asked.push_back(source);
+    return left;
+  };
+  ASSERT_TRUE(binding.Accept(Source(1), 0, has_left));
+  EXPECT_TRUE(asked.empty()) << "nothing to ask while nothing is refused";
+  // Still there: another source is refused, whatever it sends, and the test is of the bound one.
+  EXPECT_FALSE(binding.Accept(Source(2), kMs, has_left));
+  ASSERT_EQ(asked.size(), 1u);
+  EXPECT_EQ(asked[0], Source(1));
+  // Gone (its participant deleted): the next source is taken without waiting the release time.
+  left = true;
+  EXPECT_TRUE(binding.Accept(Source(2), 2 * kMs, has_left));
+  EXPECT_EQ(binding.source(), Source(2));
+  EXPECT_EQ(binding.rebinds(), 1u);
+  EXPECT_EQ(binding.refused(), 1u);
+  // The bound source itself is never asked about, nor is a message of it refused.
+  asked.clear();
+  EXPECT_TRUE(binding.Accept(Source(2), 3 * kMs, has_left));
+  EXPECT_TRUE(asked.empty());
+  // Release() alone: the next source is taken, counted as a rebind.
+  binding.Release();
+  EXPECT_FALSE(binding.bound());
+  EXPECT_TRUE(binding.Accept(Source(3), 4 * kMs));
+  EXPECT_EQ(binding.rebinds(), 2u);
 }
 
 TEST(SourceBindingTest, SourceNamesAreTheGuidPrefixInHex) {

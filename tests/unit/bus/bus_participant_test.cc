@@ -266,6 +266,30 @@ TEST_F(BusParticipantTest, PeerEventsNameAParticipantWhenItArrivesAndWhenItLeave
       << ::testing::PrintToString(events);
 }
 
+// HasLeft: what lets a service's SourceBinding take a new source at once when its bound one left.
+TEST_F(BusParticipantTest, AParticipantThatLeftIsKnownToHaveLeft) {
+  BusParticipant watcher(Options(kExchangeDomain, "dpc_bus_test_left_watcher"));
+  SourceId visitor_id{};
+  {
+    BusParticipant visitor(Options(kExchangeDomain, "dpc_bus_test_left_visitor"));
+    visitor_id = SourceOf(visitor.raw()->guid().guidPrefix);
+    EXPECT_EQ(SourceOf(PrefixOf(visitor_id)), visitor_id);
+    EXPECT_FALSE(watcher.HasLeft(visitor_id)) << "never seen";
+    ASSERT_TRUE(Eventually(
+        [&] {
+          for (const auto& p : watcher.raw()->get_participant_names()) {
+            if (p == "dpc_bus_test_left_visitor") return true;
+          }
+          return false;
+        },
+        kDiscoveryTimeout));
+    EXPECT_FALSE(watcher.HasLeft(visitor_id)) << "discovered, still there";
+  }
+  // Deleted: it says goodbye.
+  EXPECT_TRUE(Eventually([&] { return watcher.HasLeft(visitor_id); }, kDiscoveryTimeout));
+  EXPECT_FALSE(watcher.HasLeft(SourceOf(watcher.raw()->guid().guidPrefix)));
+}
+
 TEST(PrintableNameTest, APeersChosenNameCannotBreakALogLine) {
   EXPECT_EQ(PrintableName("dpc-driver/bench1"), "dpc-driver/bench1");
   EXPECT_EQ(PrintableName("evil\n12:00:00.000 [driver bench1] info: obeying x\x1b[2J"),
