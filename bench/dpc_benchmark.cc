@@ -395,22 +395,17 @@ void RegisterAll() {
       ->Args({3, 2})
       ->Args({4, 2})
       ->Unit(benchmark::kMillisecond);
-  benchmark::RegisterBenchmark("Simulator/batch-avx2", BM_SimulatorBatch)
-      ->Args({3, 1})
-      ->Args({4, 1})
-      ->Unit(benchmark::kMillisecond);
-  benchmark::RegisterBenchmark("Simulator/batch-avx512", BM_SimulatorBatch)
-      ->Args({3, 2})
-      ->Args({4, 2})
-      ->Unit(benchmark::kMillisecond);
-  benchmark::RegisterBenchmark("BatchKernel/avx2", BM_BatchKernel)
-      ->Args({3, 1})
-      ->Args({4, 1})
-      ->Unit(benchmark::kMillisecond);
-  benchmark::RegisterBenchmark("BatchKernel/avx512", BM_BatchKernel)
-      ->Args({3, 2})
-      ->Args({4, 2})
-      ->Unit(benchmark::kMillisecond);
+  // A batch and its kernel alone, per instruction set (arg 1: 1 AVX2, 2 AVX-512).
+  using Function = void (*)(benchmark::State&);
+  for (const auto& [prefix, function] : {std::pair<const char*, Function>{"Simulator/batch-", BM_SimulatorBatch},
+                                         std::pair<const char*, Function>{"BatchKernel/", BM_BatchKernel}}) {
+    for (const auto& [isa, arg] : {std::pair{"avx2", 1}, std::pair{"avx512", 2}}) {
+      benchmark::RegisterBenchmark((std::string(prefix) + isa).c_str(), function)
+          ->Args({3, arg})
+          ->Args({4, arg})
+          ->Unit(benchmark::kMillisecond);
+    }
+  }
   benchmark::RegisterBenchmark("Statistics", BM_Statistics)->Arg(3)->Arg(4);
   benchmark::RegisterBenchmark("Sweep/all-cores", BM_Sweep)
       ->Arg(3)

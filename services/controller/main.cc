@@ -157,10 +157,7 @@ class ControllerService final : public Service {
   /// Whether the writer of a received `what` is the bench's `who` (the bound source of
   /// `binding`, under mutex_): if not, the message is refused, counted and reported.
   bool FromBoundSource(SourceBinding* binding, const fdds::SampleInfo& info, const char* what, const char* who) {
-    if (binding->Accept(bus::SourceOf(info), MonotonicNs(),
-                        [this](const SourceId& bound) { return participant_->HasLeft(bound); })) {
-      return true;
-    }
+    if (participant_->AcceptFrom(binding, bus::SourceOf(info))) return true;
     core_.RejectInput(binding->Refusal(what, who));
     log_.Log(spdlog::level::warn, std::string("foreign ") + what, core_.last_rejection());
     return false;

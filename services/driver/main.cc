@@ -285,8 +285,7 @@ class DriverService final : public Service {
     std::lock_guard<std::mutex> lock(mutex_);
     // One polarimeter: samples of another participant (numbered near 2⁶⁴, say) would make every
     // real one look like a new run and every command answer an unknown sample (SourceBinding).
-    if (!sample_source_.Accept(bus::SourceOf(info), MonotonicNs(),
-                               [this](const SourceId& bound) { return participant_->HasLeft(bound); })) {
+    if (!participant_->AcceptFrom(&sample_source_, bus::SourceOf(info))) {
       log_.Log(spdlog::level::warn, "foreign sample", sample_source_.Refusal("sample", "polarimeter"));
       return;
     }

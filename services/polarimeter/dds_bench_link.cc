@@ -151,10 +151,7 @@ nlohmann::ordered_json DdsBenchLink::LoopLatencyJson() {
 }
 
 bool DdsBenchLink::FromDriver(const SourceId& source, const char* what) {
-  if (driver_source_.Accept(source, MonotonicNs(),
-                            [this](const SourceId& bound) { return participant_->HasLeft(bound); })) {
-    return true;
-  }
+  if (participant_->AcceptFrom(&driver_source_, source)) return true;
   log_.Log(spdlog::level::warn, std::string("foreign ") + what, driver_source_.Refusal(what, "driver"));
   return false;
 }

@@ -398,6 +398,10 @@ std::vector<std::string> BusParticipant::AuthenticatedPeers() const { return dis
 
 bool BusParticipant::HasLeft(const SourceId& source) const { return discovery_->HasLeft(PrefixOf(source)); }
 
+bool BusParticipant::AcceptFrom(SourceBinding* binding, const SourceId& source) const {
+  return binding->Accept(source, MonotonicNs(), [this](const SourceId& bound) { return HasLeft(bound); });
+}
+
 std::string BusParticipant::guid_prefix() const { return SourceName(SourceOf(participant_->guid().guidPrefix)); }
 
 std::vector<std::string> BusParticipant::PendingHandshakes(int64_t older_than_ns, bool returning_only) const {

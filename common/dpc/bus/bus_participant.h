@@ -467,6 +467,9 @@ class BusParticipant {
   /// when the one it is bound to has left (SourceBinding). False for a participant never seen,
   /// and possibly for one gone among more than 4096 others since (the record is bounded).
   bool HasLeft(const SourceId& source) const;
+  /// Whether `binding` takes a message of `source` heard now (MonotonicNs): SourceBinding::Accept,
+  /// which asks HasLeft of its bound source only for a message it would refuse.
+  bool AcceptFrom(SourceBinding* binding, const SourceId& source) const;
 
   /// This participant's GUID prefix, written as SourceName writes it.
   std::string guid_prefix() const;
